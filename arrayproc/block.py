@@ -1,0 +1,88 @@
+"""The unit of data that flows through a chain: one snapshot of one stream, with its context."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Pose:
+    """The array's pose at one instant.
+
+    Attributes
+    ----------
+    position : (2,) ndarray
+        Array reference point, x east / y north, m.
+    heading : float
+        Array heading, deg true (direction of the body x axis).
+    depth : float
+        Reference-point depth, m (0 when unknown).
+    speed : float
+        Speed over ground of the reference point, m/s (from the navigation track).
+    elements : (n, 3) ndarray
+        Element positions in the world frame (x east, y north, z down), m.
+    """
+
+    position: np.ndarray
+    heading: float
+    depth: float
+    speed: float
+    elements: np.ndarray
+
+
+@dataclass(frozen=True)
+class Block:
+    """One snapshot of data with its context (DESIGN section 1).
+
+    Attributes
+    ----------
+    data : ndarray
+        Axes named by ``domain``, e.g. ``("time", "channel")``, ``("freq", "channel")``,
+        ``("freq", "beam")``.
+    domain : tuple of str
+        Names of the axes of ``data``.
+    t0 : float
+        Time of the block's first sample, s since the recording start.
+    span : float
+        Duration covered by the block, s (``t0 + span/2`` is the snapshot's centre time).
+    fs : float
+        Sampling rate of the time series the block comes from, Hz.
+    positions : (n, 3) ndarray
+        Element positions in the body frame, m (active channels only).
+    pose : Pose or None
+        The array's pose at the block's centre time.
+    freqs : ndarray or None
+        Frequency axis, Hz, for frequency-domain blocks.
+    beams : ndarray or None
+        Beam axis (cone angles, deg, for line arrays; or a (n_beams, 2) array of bearing and
+        elevation, deg, for 3-D steering).
+    index : int
+        Running number of the snapshot within its stream.
+    meta : dict
+        Anything else a stage wants to pass downstream (e.g. ``nfft``, ``window`` gain).
+    """
+
+    data: np.ndarray
+    domain: tuple[str, ...]
+    t0: float
+    span: float
+    fs: float
+    positions: np.ndarray
+    pose: Pose | None = None
+    freqs: np.ndarray | None = None
+    beams: np.ndarray | None = None
+    index: int = 0
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def t_centre(self) -> float:
+        """Centre time of the snapshot, s."""
+        return self.t0 + 0.5 * self.span
+
+    def replace(self, **changes: Any) -> Block:
+        """A copy with some fields changed (the data array is not copied)."""
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,86 @@
+"""The one place FFTs are computed: pyfftw with cached plans, falling back to scipy.fft.
+
+Both back-ends keep single precision for float32/complex64 input. Outputs are fresh arrays the
+caller owns. ``set_threads`` sets the FFTW thread count (default: all cores).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import scipy.fft as _sfft
+
+try:
+    import pyfftw
+    import pyfftw.builders as _builders
+
+    HAVE_PYFFTW = True
+except ImportError:  # pragma: no cover - pyfftw is a dependency, the fallback is for odd systems
+    HAVE_PYFFTW = False
+
+_threads = os.cpu_count() or 1
+_plans: dict[tuple, object] = {}
+_MAX_PLANS = 64
+
+
+def set_threads(n: int) -> None:
+    """Number of threads FFTW uses for new plans."""
+    global _threads
+    _threads = max(1, int(n))
+    _plans.clear()
+
+
+def _plan(kind: str, x: np.ndarray, n: int | None, axis: int):
+    key = (kind, x.shape, x.dtype.str, n, axis % x.ndim, _threads)
+    p = _plans.get(key)
+    if p is None:
+        if len(_plans) >= _MAX_PLANS:
+            _plans.clear()
+        build = getattr(_builders, kind)
+        p = build(pyfftw.empty_aligned(x.shape, x.dtype), n=n, axis=axis, threads=_threads,
+                  planner_effort="FFTW_ESTIMATE", auto_align_input=True, auto_contiguous=True,
+                  avoid_copy=False)
+        _plans[key] = p
+    return p
+
+
+def _run(kind: str, x: np.ndarray, n: int | None, axis: int) -> np.ndarray:
+    x = np.asarray(x)
+    if x.dtype not in (np.float32, np.float64, np.complex64, np.complex128):
+        x = x.astype(np.float64)
+    if not HAVE_PYFFTW:
+        return getattr(_sfft, kind)(x, n=n, axis=axis)
+    if kind in ("fft", "ifft") and x.dtype.kind == "f":
+        x = x.astype(np.complex64 if x.dtype == np.float32 else np.complex128)
+    if kind == "irfft" and x.dtype.kind == "f":
+        x = x.astype(np.complex64 if x.dtype == np.float32 else np.complex128)
+    if kind == "rfft" and x.dtype.kind == "c":
+        raise TypeError("rfft needs real input")
+    out = _plan(kind, x, n, axis)(x)
+    return out.copy()
+
+
+def rfft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
+    """Real-input FFT along ``axis`` (unnormalised, as numpy)."""
+    return _run("rfft", x, n, axis)
+
+
+def irfft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
+    """Inverse of :func:`rfft` (normalised by 1/n, as numpy)."""
+    return _run("irfft", x, n, axis)
+
+
+def fft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
+    """Complex FFT along ``axis`` (unnormalised)."""
+    return _run("fft", x, n, axis)
+
+
+def ifft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
+    """Inverse complex FFT along ``axis`` (normalised by 1/n)."""
+    return _run("ifft", x, n, axis)
+
+
+def next_fast_len(n: int) -> int:
+    """Smallest FFT-friendly length >= n."""
+    return _sfft.next_fast_len(int(n))

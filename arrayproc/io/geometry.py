@@ -1,0 +1,114 @@
+"""Array geometry: element positions in the body frame and their pose in the world frame.
+
+Body frame (DESIGN section 2): x forward along the array heading, y starboard, z down, origin at
+the array reference point. World frame: x east, y north, z down.
+"""
+
+from __future__ import annotations
+
+import csv
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FormatError
+
+
+def line_array(n: int, spacing: float) -> np.ndarray:
+    """Positions (n, 3) of a uniform line array along the body x axis, centred on the origin.
+
+    Element 0 is the most forward one (x = (n-1)/2 · spacing); the reference point is the
+    array's acoustic centre, so phase references sit mid-array.
+    """
+    if n < 1 or not spacing > 0:
+        raise FormatError(f"line array needs n >= 1 and spacing > 0 (got {n}, {spacing})")
+    pos = np.zeros((n, 3))
+    pos[:, 0] = ((n - 1) / 2.0 - np.arange(n)) * spacing
+    return pos
+
+
+def read_geometry_csv(path: str | Path) -> np.ndarray:
+    """Element positions (n, 3) in m from a CSV with a header holding columns ``x, y, z``.
+
+    Other columns are ignored; one row per element, in channel order.
+    """
+    path = Path(path)
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except FileNotFoundError:
+        raise FormatError(f"{path}: no such geometry file") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise FormatError(f"{path}: cannot read geometry CSV ({e})") from None
+    if not rows:
+        raise FormatError(f"{path}: geometry CSV has no rows")
+    keys = {k.strip().lower(): k for k in rows[0] if k is not None}
+    missing = [c for c in "xyz" if c not in keys]
+    if missing:
+        raise FormatError(f"{path}: geometry CSV lacks column(s) {', '.join(missing)}")
+    try:
+        pos = np.array([[float(r[keys[c]]) for c in "xyz"] for r in rows])
+    except (TypeError, ValueError) as e:
+        raise FormatError(f"{path}: geometry CSV has a non-numeric position ({e})") from None
+    if not np.all(np.isfinite(pos)):
+        raise FormatError(f"{path}: geometry CSV has a non-finite position")
+    return pos
+
+
+def read_geometry_xml(path: str | Path) -> np.ndarray:
+    """Element positions (n, 3) in m from acoular's XML geometry (``<MicArray><pos x= y= z=/>``)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise FormatError(f"{path}: no such geometry file") from None
+    except (OSError, ET.ParseError) as e:
+        raise FormatError(f"{path}: cannot parse geometry XML ({e})") from None
+    try:
+        pos = np.array([[float(p.attrib[c]) for c in "xyz"] for p in root.iter("pos")])
+    except (KeyError, ValueError) as e:
+        raise FormatError(f"{path}: a <pos> element lacks a numeric x, y or z ({e})") from None
+    if pos.size == 0:
+        raise FormatError(f"{path}: geometry XML has no <pos> elements")
+    return pos
+
+
+def read_geometry(path: str | Path) -> np.ndarray:
+    """Element positions from a CSV or acoular XML file, chosen by the file's extension."""
+    if Path(path).suffix.lower() == ".xml":
+        return read_geometry_xml(path)
+    return read_geometry_csv(path)
+
+
+def body_to_world(positions: np.ndarray, reference: np.ndarray, heading_deg: float,
+                  depth: float = 0.0) -> np.ndarray:
+    """Element positions (n, 3) in the world frame (x east, y north, z down), m.
+
+    The body x axis (forward) points along the true heading, the body y axis (starboard) 90°
+    clockwise from it: world = reference + x·(sin h, cos h) + y·(cos h, −sin h), z + depth.
+    """
+    h = np.deg2rad(heading_deg)
+    s, c = np.sin(h), np.cos(h)
+    out = np.empty_like(positions, dtype=float)
+    out[:, 0] = reference[0] + positions[:, 0] * s + positions[:, 1] * c
+    out[:, 1] = reference[1] + positions[:, 0] * c - positions[:, 1] * s
+    out[:, 2] = positions[:, 2] + depth
+    return out
+
+
+def aperture(positions: np.ndarray) -> float:
+    """Largest distance (m) between two elements."""
+    d = positions[:, None, :] - positions[None, :, :]
+    return float(np.sqrt((d**2).sum(-1)).max()) if len(positions) > 1 else 0.0
+
+
+def geometry_kind(positions: np.ndarray, tol: float = 1e-9) -> str:
+    """``"line"`` (uniform or not, on one straight line), ``"planar"`` or ``"volumetric"``."""
+    if len(positions) < 3:
+        return "line"
+    centred = positions - positions.mean(axis=0)
+    s = np.linalg.svd(centred, compute_uv=False)
+    scale = max(s[0], tol)
+    rank = int(np.sum(s > 1e-6 * scale))
+    return {1: "line", 2: "planar"}.get(rank, "volumetric")

@@ -1,0 +1,171 @@
+"""Products files (DESIGN section 4): groups of columns appended as blocks come.
+
+Each group is named after the producing stage and carries attrs ``kind`` and ``stage``. Column
+datasets are resizable along their first axis, chunked and compressed; static datasets (axes
+such as ``cone_deg`` or ``freq``) are written once. The file is built under a temporary name and
+renamed only when the run finished, with root attr ``complete = True``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from .. import __version__
+from ..errors import FormatError
+from .atomic import commit, discard, temporary_sibling
+from .recording import open_h5
+
+FORMAT = "arrayproc.products"
+FORMAT_VERSION = 1
+KINDS = ("btr", "lofar", "bearings", "delays", "contacts", "tracks", "power", "ibf_removed",
+         "psas", "detections")
+
+#: Target size of one chunk of a column dataset, bytes.
+CHUNK_BYTES = 1 << 18
+
+
+class GroupWriter:
+    """Appends rows to one products group.
+
+    ``time_window`` (t_start, t_stop) drops rows whose ``time`` falls outside it: this is how a
+    segment with a warm-up margin writes only its own rows.
+    """
+
+    def __init__(self, group: h5py.Group, time_window: tuple[float, float] | None = None):
+        self._g = group
+        self._window = time_window
+        self.n_rows = 0
+
+    @property
+    def attrs(self) -> h5py.AttributeManager:
+        return self._g.attrs
+
+    def set(self, name: str, data: np.ndarray, **attrs: Any) -> None:
+        """Write a static dataset (e.g. an axis), replacing any earlier one."""
+        if name in self._g:
+            del self._g[name]
+        d = self._g.create_dataset(name, data=np.asarray(data))
+        for k, v in attrs.items():
+            d.attrs[k] = v
+
+    def append(self, **columns: np.ndarray) -> None:
+        """Append rows: every column has the same length along its first axis."""
+        cols = {k: np.asarray(v) for k, v in columns.items()}
+        lengths = {v.shape[0] if v.ndim else 1 for v in cols.values()}
+        if len(lengths) != 1:
+            raise ValueError(f"columns of unequal length: { {k: v.shape for k, v in cols.items()} }")
+        cols = {k: (v.reshape(1) if v.ndim == 0 else v) for k, v in cols.items()}
+        if self._window is not None and "time" in cols:
+            t = cols["time"]
+            keep = (t >= self._window[0]) & (t < self._window[1])
+            if not keep.all():
+                cols = {k: v[keep] for k, v in cols.items()}
+        n = next(iter(cols.values())).shape[0]
+        if n == 0 and self.n_rows > 0:
+            return
+        for k, v in cols.items():
+            if k not in self._g:
+                row_bytes = max(1, int(np.prod(v.shape[1:])) * v.dtype.itemsize)
+                chunk_rows = max(1, min(4096, CHUNK_BYTES // row_bytes))
+                self._g.create_dataset(
+                    k, shape=(0,) + v.shape[1:], maxshape=(None,) + v.shape[1:],
+                    dtype=v.dtype, chunks=(chunk_rows,) + v.shape[1:], compression="gzip",
+                    compression_opts=1, shuffle=True)
+            d = self._g[k]
+            if d.shape[1:] != v.shape[1:]:
+                raise ValueError(f"column {k}: row shape {v.shape[1:]} != {d.shape[1:]}")
+            d.resize(self.n_rows + n, axis=0)
+            d[self.n_rows:self.n_rows + n] = v
+        self.n_rows += n
+
+
+class ProductsWriter:
+    """Writes a products file; use as a context manager so a failed run leaves nothing behind."""
+
+    def __init__(self, path: str | os.PathLike, source: str = "", chain: str = "",
+                 time_window: tuple[float, float] | None = None,
+                 attrs: dict[str, Any] | None = None) -> None:
+        self.path = Path(path)
+        self._tmp = temporary_sibling(self.path)
+        self._f = h5py.File(self._tmp, "w")
+        a = self._f.attrs
+        a["format"] = FORMAT
+        a["format_version"] = FORMAT_VERSION
+        a["source"] = str(source)
+        a["chain"] = chain
+        a["software_version"] = __version__
+        a["complete"] = False
+        for k, v in (attrs or {}).items():
+            a[k] = v
+        self._window = time_window
+        self._groups: dict[str, GroupWriter] = {}
+
+    def group(self, name: str, kind: str, stage: str | None = None,
+              **attrs: Any) -> GroupWriter:
+        """The writer for group ``name`` (created on first use) of product ``kind``."""
+        if name in self._groups:
+            return self._groups[name]
+        g = self._f.create_group(name)
+        g.attrs["kind"] = kind
+        g.attrs["stage"] = stage or name
+        for k, v in attrs.items():
+            g.attrs[k] = v
+        w = GroupWriter(g, self._window)
+        self._groups[name] = w
+        return w
+
+    def close(self) -> None:
+        """Mark the run complete and move the file into place."""
+        self._f.attrs["complete"] = True
+        self._f.close()
+        commit(self._tmp, self.path)
+
+    def abort(self) -> None:
+        try:
+            self._f.close()
+        finally:
+            discard(self._tmp)
+
+    def __enter__(self) -> ProductsWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def is_products(path: str | os.PathLike) -> bool:
+    """Whether the file at path is an arrayproc products file."""
+    with open_h5(path) as f:
+        fmt = f.attrs.get("format", "")
+        return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == FORMAT
+
+
+def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
+    """Every group of a products file as ``{name: {"kind", "stage", "attrs", dataset: array}}``.
+
+    Root attributes are under the key ``"/"``.
+    """
+    with open_h5(path, "products file") as f:
+        fmt = f.attrs.get("format", "")
+        fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
+        if fmt != FORMAT:
+            raise FormatError(f"{path}: not an arrayproc products file")
+        out: dict[str, dict[str, Any]] = {"/": dict(f.attrs)}
+        for name, g in f.items():
+            if not isinstance(g, h5py.Group):
+                continue
+            d: dict[str, Any] = {"kind": g.attrs.get("kind", ""), "stage": g.attrs.get("stage", ""),
+                                 "attrs": dict(g.attrs)}
+            for k, v in g.items():
+                if isinstance(v, h5py.Dataset):
+                    d[k] = v[()]
+            out[name] = d
+        return out
