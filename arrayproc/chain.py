@@ -386,7 +386,8 @@ class FrameBuffer:
         s0 = int(block.meta.get("sample0", round(block.t0 * block.fs)))
         if self._next is None:
             self._next = -(-s0 // self.hop) * self.hop  # first grid point at or after s0
-        if self._buf is None or self._buf.shape[0] == 0 or self._buf_start + self._buf.shape[0] != s0:
+        contiguous = self._buf is not None and self._buf_start + self._buf.shape[0] == s0
+        if not contiguous or self._buf.shape[0] == 0:
             self._buf, self._buf_start = x, s0
         else:
             self._buf = np.concatenate([self._buf, x])

@@ -21,9 +21,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from .plots import plot_file
     from .errors import ArrayprocError
     from .io.atomic import commit, discard, temporary_sibling
+    from .plots import plot_file
     kind = args.kind or _default_kind(args.file)
     options = {"range_db": args.range_db}
     if args.beam is not None:

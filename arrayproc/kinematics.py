@@ -37,7 +37,7 @@ def wrap_180(a: np.ndarray | float) -> np.ndarray:
 
 
 def course_to_velocity(course_deg: np.ndarray | float, speed: np.ndarray | float) -> np.ndarray:
-    """Velocity (vx east, vy north) in m/s of a course (deg true) and speed (m/s); shape (..., 2)."""
+    """Velocity (vx east, vy north), m/s, of a course (deg true) and speed (m/s); (..., 2)."""
     c = np.deg2rad(course_deg)
     return np.stack(np.broadcast_arrays(speed * np.sin(c), speed * np.cos(c)), axis=-1)
 
@@ -50,7 +50,7 @@ def interp_angle_deg(t: np.ndarray, tp: np.ndarray, ap_deg: np.ndarray) -> np.nd
 
 @dataclass(frozen=True)
 class Segment:
-    """Constant speed (m/s) and turn rate (deg/s, positive = clockwise/starboard) for ``duration`` s."""
+    """Constant speed (m/s) and turn rate (deg/s, > 0 clockwise) for ``duration`` s."""
 
     duration: float
     speed: float

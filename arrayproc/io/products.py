@@ -58,7 +58,8 @@ class GroupWriter:
         cols = {k: np.asarray(v) for k, v in columns.items()}
         lengths = {v.shape[0] if v.ndim else 1 for v in cols.values()}
         if len(lengths) != 1:
-            raise ValueError(f"columns of unequal length: { {k: v.shape for k, v in cols.items()} }")
+            shapes = {k: v.shape for k, v in cols.items()}
+            raise ValueError(f"columns of unequal length: {shapes}")
         cols = {k: (v.reshape(1) if v.ndim == 0 else v) for k, v in cols.items()}
         if self._window is not None and "time" in cols:
             t = cols["time"]

@@ -249,8 +249,9 @@ class Recording:
 
         Block k covers samples [start + k·hop, start + k·hop + nfft). The last block is the
         first one that reaches ``stop``; samples past ``stop`` are zeros and the block's
-        ``meta["n_valid"]`` says how many are real. So the hop-long heads of the blocks tile
-        [start, stop) exactly. Each block carries the pose at its centre time.
+        ``meta["n_valid"]`` says how many are real. So the hop-long heads of all blocks but the
+        last, followed by the last block's valid samples, tile [start, stop) exactly. Each
+        block carries the pose at its centre time.
         """
         hop = nfft if hop is None else int(hop)
         nfft = int(nfft)
