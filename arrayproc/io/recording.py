@@ -155,6 +155,7 @@ class Recording:
         self._apply_gain = not np.all(self.gains == 1.0)
 
         self.nav = self._read_nav()
+        self._static_pose: Pose | None = None
 
     def _read_nav(self) -> Nav:
         f, p = self._f, self.path
@@ -231,9 +232,20 @@ class Recording:
 
     def pose(self, t: float) -> Pose:
         """The array's pose at time t (s): reference point, heading, element world positions."""
+        return self.poses(np.array([t]))[0]
+
+    def poses(self, t: np.ndarray) -> list[Pose]:
+        """Poses at several times at once (one interpolation pass over the nav track)."""
+        if self.nav.time.size == 1:  # static array: one pose serves every block
+            if self._static_pose is None:
+                pos, hd, dp, spd = self.nav.at(0.0)
+                self._static_pose = Pose(pos[0], float(hd[0]), float(dp[0]), 0.0, body_to_world(
+                    self.positions, pos[0], float(hd[0]), float(dp[0])))
+            return [self._static_pose] * len(t)
         pos, hd, dp, spd = self.nav.at(t)
-        return Pose(pos[0], float(hd[0]), float(dp[0]), float(spd[0]),
-                    body_to_world(self.positions, pos[0], float(hd[0]), float(dp[0])))
+        return [Pose(pos[i], float(hd[i]), float(dp[i]), float(spd[i]),
+                     body_to_world(self.positions, pos[i], float(hd[i]), float(dp[i])))
+                for i in range(len(t))]
 
     def n_blocks(self, nfft: int, hop: int, start: int = 0, stop: int | None = None) -> int:
         """How many blocks :meth:`blocks` yields for these parameters."""
@@ -267,6 +279,7 @@ class Recording:
             a = start + k * hop
             b = min(stop, start + (kk - 1) * hop + nfft)
             slab = self.read(a, b, dtype)
+            poses = self.poses((start + np.arange(k, kk) * hop + 0.5 * nfft) / self.fs)
             for j in range(k, kk):
                 s = start + j * hop
                 seg = slab[s - a: s - a + nfft]
@@ -276,7 +289,7 @@ class Recording:
                         [seg, np.zeros((nfft - n_valid, self.n_channels), dtype=dtype)])
                 t0 = s / self.fs
                 yield Block(seg, ("time", "channel"), t0, nfft / self.fs, self.fs,
-                            self.positions, self.pose(t0 + 0.5 * nfft / self.fs),
+                            self.positions, poses[j - k],
                             index=first_index + j, meta={"n_valid": n_valid, "sample0": s})
             k = kk
 
