@@ -25,7 +25,8 @@ MODEL_CV = 0
 MODEL_CT = 1
 KIND_EKF = 0
 KIND_SP = 1
-KIND_SRF = 2
+KIND_SRF = 2  # shifted Rayleigh, likelihood of the L-R paper section IV
+KIND_SRF_EXACT = 3  # shifted Rayleigh, exact (projected normal) bearing likelihood
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -274,7 +275,7 @@ def ekf_update(x, P, z: float, R: float):
 
 @njit(cache=True)
 def sp_predict(model: int, x, P, T: float, o0, o1, Q, U, wm, wc) -> int:
-    """Sample-point time update: X_i = x + L U_i (L L' = P), propagate each point through
+    """Sample-point time update: X_i = x + L U_i (L Lᵀ = P), propagate each point through
     eqs. (1)-(6), mean Σ wm_i f(X_i), covariance Σ wc_i (f(X_i) − x̄)(·)ᵀ + Q. In place."""
     n = x.shape[0]
     npts = U.shape[0]
@@ -282,27 +283,26 @@ def sp_predict(model: int, x, P, T: float, o0, o1, Q, U, wm, wc) -> int:
     st = chol_repair(P, L)
     if st < 0:
         return -1
+    X = U @ L.T
     Y = np.empty((npts, n))
     Xi = np.empty(n)
     yi = np.empty(n)
     for p in range(npts):
         for i in range(n):
-            acc = x[i]
-            for j in range(i + 1):
-                acc += L[i, j] * U[p, j]
-            Xi[i] = acc
+            Xi[i] = x[i] + X[p, i]
         propagate(model, Xi, T, o0, o1, yi)
-        Y[p, :] = yi
-    xm = np.zeros(n)
+        for i in range(n):
+            Y[p, i] = yi[i]
+    xm = wm @ Y
     for p in range(npts):
         for i in range(n):
-            xm[i] += wm[p] * Y[p, i]
-    Pn = Q.copy()
+            Y[p, i] -= xm[i]
+    D = Y.T.copy()
     for p in range(npts):
+        w = wc[p]
         for i in range(n):
-            di = Y[p, i] - xm[i]
-            for j in range(n):
-                Pn[i, j] += wc[p] * di * (Y[p, j] - xm[j])
+            D[i, p] *= w
+    Pn = D @ Y + Q
     x[:] = xm
     P[:, :] = Pn
     st2 = chol_repair(P, L)
@@ -315,8 +315,10 @@ def sp_predict(model: int, x, P, T: float, o0, o1, Q, U, wm, wc) -> int:
 def sp_update(x, P, z: float, R: float, U, wm, wc):
     """Sample-point measurement update with the bearing of eq. (7).
 
-    Points are redrawn from the predicted (x, P). The predicted bearing is the weighted mean
-    of the point bearings unwrapped around the first point's bearing; residuals are wrapped.
+    Points are redrawn from the predicted (x, P): X_i = x + L U_i. The predicted bearing is the
+    weighted mean of the point bearings unwrapped around the first point's bearing; residuals
+    are wrapped. Because X_i − x = L U_i, the cross-covariance is L Σ wc_i U_i Δz_i, and only
+    the first two (position) rows of L U_i are needed for the bearings.
     Returns (log-likelihood of eq. (9), status). In place.
     """
     n = x.shape[0]
@@ -325,34 +327,31 @@ def sp_update(x, P, z: float, R: float, U, wm, wc):
     st = chol_repair(P, L)
     if st < 0:
         return -np.inf, -1
-    X = np.empty((npts, n))
     Zs = np.empty(npts)
+    l00 = L[0, 0]
+    l10 = L[1, 0]
+    l11 = L[1, 1]
     for p in range(npts):
-        for i in range(n):
-            acc = x[i]
-            for j in range(i + 1):
-                acc += L[i, j] * U[p, j]
-            X[p, i] = acc
-        Zs[p] = math.atan2(X[p, 0], X[p, 1])
+        Zs[p] = math.atan2(x[0] + l00 * U[p, 0], x[1] + l10 * U[p, 0] + l11 * U[p, 1])
     zref = Zs[0]
     zp = 0.0
     for p in range(npts):
         zp += wm[p] * wrap(Zs[p] - zref)
     zp = wrap(zref + zp)
     S = R
-    Pxz = np.zeros(n)
+    g = np.zeros(n)  # Σ wc_i U_i Δz_i
     for p in range(npts):
         dz = wrap(Zs[p] - zp)
         S += wc[p] * dz * dz
-        for i in range(n):
-            Pxz[i] += wc[p] * (X[p, i] - x[i]) * dz
+        for j in range(n):
+            g[j] += wc[p] * U[p, j] * dz
     if not S > 0.0:
         return -np.inf, -1
+    Pxz = L @ g
     nu = wrap(z - zp)
     ll = -0.5 * (_LOG_2PI + math.log(S) + nu * nu / S)
     for i in range(n):
-        K = Pxz[i] / S
-        x[i] += K * nu
+        x[i] += Pxz[i] / S * nu
     for i in range(n):
         for j in range(n):
             P[i, j] -= Pxz[i] * Pxz[j] / S
@@ -389,7 +388,22 @@ def shifted_rayleigh_moments(u: float):
 
 
 @njit(cache=True)
-def srf_update(x, P, z: float, sigma: float):
+def _log_phi_plus_u_Phi(u: float) -> float:
+    """log(φ(u) + u Φ(u)), stable for large negative u (via the Mills ratio)."""
+    if u > 0.0:
+        return math.log(math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
+                        + u * 0.5 * math.erfc(-u / math.sqrt(2.0)))
+    if u > -30.0:
+        phi = math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
+        m = 0.5 * math.erfc(-u / math.sqrt(2.0)) / phi
+    else:
+        v = 1.0 / (u * u)
+        m = -1.0 / u * (1.0 - v + 3.0 * v * v - 15.0 * v * v * v + 105.0 * v ** 4)
+    return -0.5 * u * u - 0.5 * _LOG_2PI + math.log(1.0 + u * m)
+
+
+@njit(cache=True)
+def srf_update(x, P, z: float, sigma: float, exact: bool = False):
     """Shifted Rayleigh measurement update (Clark, Vinter & Yaqoob 2007), L-R paper section IV.
 
     Measurement model b = π(H X + w), b = [sin z, cos z]ᵀ, w ~ N(0, R^m I₂) with
@@ -397,7 +411,10 @@ def srf_update(x, P, z: float, sigma: float):
     γ = ρ(u)/√α (the conditional mean of |HX + w| given b). Posterior moments:
     x̂ + K(γ b − H x̂), P − K H P + Var(s) K b bᵀ Kᵀ with K = P Hᵀ V⁻¹, Var(s) = (2 + uρ − ρ²)/α.
 
-    Returns (log N(γ b; H x̂, V), the section-IV likelihood used by eqs. (9)-(11), status).
+    Returns (log-likelihood, status). The likelihood is the L-R paper's section-IV
+    N(γ b; H x̂, V), or with ``exact`` the density of the bearing itself under the same model
+    (the projected normal, ∫ s N(s b; H x̂, V) ds):
+    log p(θ) = −½ log(2π) − ½ log|V| − ½(x̂ᵀHᵀV⁻¹H x̂ − u²) − log α + log(φ(u) + uΦ(u)).
     """
     n = x.shape[0]
     b0 = math.sin(z)
@@ -423,8 +440,13 @@ def srf_update(x, P, z: float, sigma: float):
     var_s = (m2 - rho * rho) / alpha
     e0 = gamma * b0 - x[0]
     e1 = gamma * b1 - x[1]
-    ll = -_LOG_2PI - 0.5 * math.log(det) - 0.5 * (
-        e0 * (i00 * e0 + i01 * e1) + e1 * (i01 * e0 + i11 * e1))
+    if exact:
+        mvm = x[0] * (i00 * x[0] + i01 * x[1]) + x[1] * (i01 * x[0] + i11 * x[1])
+        ll = -0.5 * _LOG_2PI - 0.5 * math.log(det) - 0.5 * (mvm - u * u) - math.log(alpha) \
+            + _log_phi_plus_u_Phi(u)
+    else:
+        ll = -_LOG_2PI - 0.5 * math.log(det) - 0.5 * (
+            e0 * (i00 * e0 + i01 * e1) + e1 * (i01 * e0 + i11 * e1))
     # K = P Hᵀ V⁻¹ (n × 2)
     K = np.empty((n, 2))
     for i in range(n):
@@ -458,7 +480,7 @@ def filter_predict(kind: int, model: int, x, P, T: float, o0, o1, q1: float, q2:
     n = x.shape[0]
     Q = np.empty((n, n))
     process_noise(model, T, q1, q2, Q)
-    if kind == KIND_EKF or (kind == KIND_SRF and model == MODEL_CV):
+    if kind == KIND_EKF or (kind >= KIND_SRF and model == MODEL_CV):
         return ekf_predict(model, x, P, T, o0, o1, Q)
     return sp_predict(model, x, P, T, o0, o1, Q, Upred, wmpred, wcpred)
 
@@ -468,29 +490,31 @@ def filter_update(kind: int, x, P, z: float, sigma: float, U, wm, wc):
     """One bearing update of filter ``kind``; returns (log-likelihood, status)."""
     if kind == KIND_EKF:
         return ekf_update(x, P, z, sigma * sigma)
-    if kind == KIND_SRF:
-        return srf_update(x, P, z, sigma)
+    if kind == KIND_SRF or kind == KIND_SRF_EXACT:
+        return srf_update(x, P, z, sigma, kind == KIND_SRF_EXACT)
     return sp_update(x, P, z, sigma * sigma, U, wm, wc)
 
 
 @njit(cache=True)
 def init_from_bearing(z: float, own, r_mean: float, sigma_r: float, s_mean: float,
                       sigma_s: float, sigma_theta: float, sigma_c: float, sigma_psi: float,
-                      x, P) -> None:
+                      x, P, r0: float, s0: float, dc: float) -> None:
     """Initialisation from the first bearing (Ristic, Arulampalam & Gordon 2003, ch. 6):
     range r ~ N(r̄, σr²) on the measured bearing, target speed s ~ N(s̄, σs²) on a course
     c ~ N(z + π, σc²) (heading towards the observer); Gaussian moments by linearisation.
-    For CT (len(x) == 5) the turn rate starts at 0 with standard deviation σψ."""
+    The mean is taken at (r0, s0, z + π + dc) — (r̄, s̄, z + π) for the prior mean, or a draw
+    from the prior in Monte Carlo runs. For CT (len(x) == 5) the turn rate starts at 0 with
+    standard deviation σψ."""
     n = x.shape[0]
     sz = math.sin(z)
     cz = math.cos(z)
     c = z + math.pi
     sc = math.sin(c)
     cc = math.cos(c)
-    x[0] = r_mean * sz
-    x[1] = r_mean * cz
-    x[2] = s_mean * sc - own[2]
-    x[3] = s_mean * cc - own[3]
+    x[0] = r0 * sz
+    x[1] = r0 * cz
+    x[2] = s0 * math.sin(c + dc) - own[2]
+    x[3] = s0 * math.cos(c + dc) - own[3]
     for i in range(n):
         for j in range(n):
             P[i, j] = 0.0
@@ -511,14 +535,17 @@ def init_from_bearing(z: float, own, r_mean: float, sigma_r: float, s_mean: floa
 
 @njit(cache=True)
 def run_track(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q1: float,
-              q2: float, prior, U, wm, wc, Upred, wmpred, wcpred, xs_out, Ps_out, w_out):
+              q2: float, prior, init_draw, U, wm, wc, Upred, wmpred, wcpred, xs_out, Ps_out,
+              w_out):
     """Run one filter (``n_hyp`` = 1) or the two-hypothesis L-R scheme (``n_hyp`` = 2,
     L-R paper eqs. (9)-(13)) over one sequence of bearings.
 
     times (K,), zs (K, n_hyp) bearings in rad (column h feeds hypothesis h), own (K, 4)
-    observer states, prior = [r̄, σr, s̄, σs, σθ, σc, σψ]. Writes the combined estimate
-    xs_out (K, n) (eq. (12)), its covariance Ps_out (K, n, n) (eq. (13)) and the weights
-    w_out (K, n_hyp) (eqs. (10)-(11)). Returns a status: bit 1 a covariance was repaired,
+    observer states, prior = [r̄, σr, s̄, σs, σθ, σc, σψ], init_draw = (r0, s0, dc) the
+    initial range, speed and course offset of the mean (see :func:`init_from_bearing`).
+    Writes the combined estimate xs_out (K, n) (eq. (12)), its covariance Ps_out (K, n, n)
+    (eq. (13)) and the weights w_out (K, n_hyp) (eqs. (10)-(11)). Returns a status: bit 1 a
+    covariance was repaired,
     bit 2 a hypothesis diverged (its weight is set to zero), bit 4 every hypothesis diverged
     (the estimate is then frozen at its last finite value).
     """
@@ -531,7 +558,8 @@ def run_track(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q
     status = 0
     for h in range(n_hyp):
         init_from_bearing(zs[0, h], own[0], prior[0], prior[1], prior[2], prior[3], prior[4],
-                          prior[5], prior[6], X[h], P[h])
+                          prior[5], prior[6], X[h], P[h], init_draw[0], init_draw[1],
+                          init_draw[2])
         logw[h] = -math.log(n_hyp)
     for k in range(K):
         if k > 0:
@@ -595,11 +623,11 @@ def run_track(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q
 
 @njit(parallel=True, cache=True)
 def run_montecarlo(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q1: float,
-                   q2: float, prior, U, wm, wc, Upred, wmpred, wcpred, n: int):
+                   q2: float, prior, init_draws, U, wm, wc, Upred, wmpred, wcpred, n: int):
     """:func:`run_track` over independent runs in parallel.
 
-    zs (R, K, n_hyp). Returns estimates (R, K, 4) (position and velocity of eq. (12)),
-    weights (R, K, n_hyp), final covariance (R, n, n) and status (R,).
+    zs (R, K, n_hyp), init_draws (R, 3). Returns estimates (R, K, 4) (position and velocity
+    of eq. (12)), weights (R, K, n_hyp), final covariance (R, n, n) and status (R,).
     """
     R = zs.shape[0]
     K = times.shape[0]
@@ -612,7 +640,7 @@ def run_montecarlo(kind: int, model: int, n_hyp: int, times, zs, own, sigma: flo
         Ps = np.empty((K, n, n))
         ws = np.empty((K, n_hyp))
         status[r] = run_track(kind, model, n_hyp, times, zs[r], own, sigma, q1, q2, prior,
-                              U, wm, wc, Upred, wmpred, wcpred, xs, Ps, ws)
+                              init_draws[r], U, wm, wc, Upred, wmpred, wcpred, xs, Ps, ws)
         est[r] = xs[:, :4]
         wts[r] = ws
         Pfin[r] = Ps[K - 1]

@@ -123,10 +123,20 @@ class GHF(GaussianFilter):
 
 class SRF(GaussianFilter):
     """Shifted Rayleigh filter: exact moment-matched bearing update; exact linear prediction for
-    CV; cubature points for the CT prediction (L-R paper section IV)."""
+    CV; cubature points for the CT prediction (L-R paper section IV). ``likelihood`` for the
+    L-R weights: ``"paper"`` (section IV's N(γb; Hx̂, V)) or ``"exact"`` (the bearing's own
+    projected-normal density)."""
 
     name = "srf"
     kind = kc.KIND_SRF
+
+    def __init__(self, model: MotionModel, sigma_deg: float = 1.5,
+                 likelihood: str = "exact") -> None:
+        super().__init__(model, sigma_deg)
+        if likelihood not in ("paper", "exact"):
+            raise ConfigError("tracker: srf likelihood must be 'paper' or 'exact'")
+        self.likelihood = likelihood
+        self.kind = kc.KIND_SRF if likelihood == "paper" else kc.KIND_SRF_EXACT
 
 
 FILTERS: dict[str, type[GaussianFilter]] = {
