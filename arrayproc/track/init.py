@@ -48,5 +48,5 @@ def init_from_bearing(bearing_deg: float, own_state: np.ndarray, prior: TrackPri
     P = np.empty((dim, dim))
     p = prior.as_array()
     kc.init_from_bearing(math.radians(bearing_deg), np.asarray(own_state, float), p[0], p[1],
-                         p[2], p[3], p[4], p[5], p[6], x, P)
+                         p[2], p[3], p[4], p[5], p[6], x, P, p[0], p[2], 0.0)
     return x, P
