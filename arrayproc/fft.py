@@ -84,3 +84,49 @@ def ifft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
 def next_fast_len(n: int) -> int:
     """Smallest FFT-friendly length >= n."""
     return _sfft.next_fast_len(int(n))
+
+
+class BufferedPlan:
+    """A reusable transform over fixed-shape aligned buffers, for hot loops.
+
+    Fill :attr:`input` (an aligned array of the planned shape and dtype) in place, then call
+    the plan: it returns the output buffer, which the plan owns and overwrites on the next
+    call. Planned with ``FFTW_MEASURE`` (slower to build, faster to run: about 2x on strided
+    batched float32 rfft here) and cached by shape. Falls back to scipy.fft without pyfftw.
+    """
+
+    def __init__(self, kind: str, shape: tuple[int, ...], dtype: np.dtype | type,
+                 axis: int = -1) -> None:
+        self.kind, self.axis = kind, axis
+        dtype = np.dtype(dtype)
+        if HAVE_PYFFTW:
+            self.input = pyfftw.empty_aligned(shape, dtype)
+            self.input[...] = 0
+            self._fftw = getattr(_builders, kind)(
+                self.input, axis=axis, threads=_threads, planner_effort="FFTW_MEASURE",
+                overwrite_input=False, avoid_copy=True, auto_align_input=False,
+                auto_contiguous=False)
+        else:  # pragma: no cover - fallback
+            self.input = np.zeros(shape, dtype)
+            self._fftw = None
+
+    def __call__(self) -> np.ndarray:
+        if self._fftw is None:  # pragma: no cover - fallback
+            return getattr(_sfft, self.kind)(self.input, axis=self.axis)
+        return self._fftw()
+
+
+_buffered: dict[tuple, BufferedPlan] = {}
+
+
+def buffered_plan(kind: str, shape: tuple[int, ...], dtype: np.dtype | type = np.float32,
+                  axis: int = -1) -> BufferedPlan:
+    """A cached :class:`BufferedPlan` for ``kind`` in ("rfft", "fft", "irfft", "ifft")."""
+    key = (kind, tuple(shape), np.dtype(dtype).str, axis, _threads)
+    p = _buffered.get(key)
+    if p is None:
+        if len(_buffered) >= _MAX_PLANS:
+            _buffered.clear()
+        p = BufferedPlan(kind, tuple(shape), dtype, axis)
+        _buffered[key] = p
+    return p

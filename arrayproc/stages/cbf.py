@@ -1,0 +1,371 @@
+"""``cbf``: frequency-domain conventional (delay-and-sum) beamformer, thesis eq. (2.8).
+
+For each snapshot (``nfft`` samples every ``hop``, time taper ``window``) and each frequency bin
+f in ``band``, the beam output is
+
+    Y(θ, f) = Σ_n w_n X_n(f) exp(−j 2π f τ_n(θ)),     τ_n(θ) = (r_n − r̄)·k(θ) / c,
+
+the DFT-domain delay-and-sum of eq. (2.6)/(2.8): X_n is the (unnormalised) DFT of hydrophone n,
+k(θ) the unit vector towards the source, r̄ the element centroid (phase reference) and w_n the
+array shading (mean 1). A plane wave from θ0 therefore gives Y ∝ I_NH(θ, θ0, f) of eq. (2.13),
+and white noise of variance σ² per sample gives E|Y|² = N_DFT N_H σ² (rectangular window, no
+shading), as in thesis 2.1.1.1. The sign of the exponent is the physical one for numpy's DFT
+convention (e^{−j2πkl/N}); eq. (2.8) writes the opposite sign for the opposite convention.
+
+Beams (``beams`` table):
+
+- ``{start, stop, count}``: cone angles θ in degrees (0 forward end-fire, 90 broadside), for line
+  arrays; only the body-frame x coordinate of each element enters (the cone's projection on
+  the array axis), so a line array along the body x axis is steered exactly. Optional
+  ``spacing = "cos"`` spaces the beams uniformly in cos θ instead of θ.
+- ``{bearings = [...], elevations = [...]}``: for 3-D arrays, every combination of a bearing
+  relative to the array's forward axis (deg, clockwise seen from above, i.e. towards
+  starboard) and an elevation (deg above the horizontal, default ``[0]``).
+
+Steering uses the element positions of each block (the steering matrix is rebuilt whenever
+they change). Output: blocks of domain ``("snapshot", "freq", "beam")``, complex64, holding up
+to ``batch`` snapshots each (docs/architecture.md, "Snapshot batches"); ``meta["times"]`` has
+each snapshot's centre time (s) and ``meta["headings"]`` the array heading (deg) at that time.
+
+Implementation: rfft of all frames of a batch through :mod:`arrayproc.fft`, then per bin one
+*real* GEMM of the paired steering rows against the stacked real/imaginary snapshots (see
+:mod:`arrayproc.kernels.beamform`): beams in opposite directions (θ and 180° − θ) share their
+rows, which halves the work of a complex GEMM for the usual symmetric fan. Bins are split over
+``threads`` worker threads, each running single-threaded BLAS.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+from scipy.signal import get_window
+
+from .. import fft
+from ..block import Block
+from ..chain import FrameBuffer, Param, Stage, positive, register
+from ..errors import ConfigError
+from ..kernels import beamform as kb
+from ..kernels.blas_threads import set_local_threads
+from ..shading import KINDS as SHADINGS
+from ..shading import shading_weights
+
+WINDOWS = ("none", "hann", "hamming", "blackman", "blackmanharris")
+BINS_PER_TASK = 16
+
+_pools: dict[int, ThreadPoolExecutor] = {}
+
+
+def _pool(n: int) -> ThreadPoolExecutor:
+    if n not in _pools:
+        _pools[n] = ThreadPoolExecutor(n, thread_name_prefix="cbf",
+                                       initializer=set_local_threads, initargs=(1,))
+    return _pools[n]
+
+
+def time_window(name: str, nfft: int) -> np.ndarray:
+    """Periodic time taper of length ``nfft`` normalised to mean 1 (coherent gain 1)."""
+    if name == "none":
+        return np.ones(nfft)
+    w = get_window(name, nfft, fftbins=True)
+    return w / w.mean()
+
+
+def beam_directions(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
+    """Beam axis and unit direction vectors from a ``beams`` table.
+
+    Returns ``(axis, dirs, mode)``: ``axis`` cone angles (B,) deg or (B, 2) [bearing,
+    elevation] deg; ``dirs`` (B, 3) body-frame unit vectors (for cone beams only the x
+    component, cos θ, is used); ``mode`` is ``"cone"`` or ``"3d"``.
+    """
+    keys = set(beams)
+    if keys <= {"start", "stop", "count", "spacing"} and {"start", "stop", "count"} <= keys:
+        try:
+            a, b, n = float(beams["start"]), float(beams["stop"]), int(beams["count"])
+        except (TypeError, ValueError):
+            raise ConfigError("key 'beams': start, stop must be numbers and count an "
+                              "integer") from None
+        if n < 1 or not (0.0 <= a <= 180.0 and 0.0 <= b <= 180.0):
+            raise ConfigError("key 'beams': cone angles must lie in [0, 180] deg and count >= 1")
+        spacing = beams.get("spacing", "angle")
+        if spacing == "angle":
+            cone = np.linspace(a, b, n)
+        elif spacing == "cos":
+            cone = np.rad2deg(np.arccos(np.linspace(np.cos(np.deg2rad(a)),
+                                                    np.cos(np.deg2rad(b)), n)))
+        else:
+            raise ConfigError("key 'beams': spacing must be 'angle' or 'cos'")
+        dirs = np.zeros((n, 3))
+        dirs[:, 0] = np.cos(np.deg2rad(cone))
+        return cone, dirs, "cone"
+    if "bearings" in keys and keys <= {"bearings", "elevations"}:
+        try:
+            brg = np.asarray(beams["bearings"], float).reshape(-1)
+            elv = np.asarray(beams.get("elevations", [0.0]), float).reshape(-1)
+        except (TypeError, ValueError):
+            raise ConfigError("key 'beams': bearings and elevations must be lists of "
+                              "numbers") from None
+        if brg.size == 0 or elv.size == 0 or np.any(np.abs(elv) > 90):
+            raise ConfigError("key 'beams': need at least one bearing and elevations in "
+                              "[-90, 90] deg")
+        e, b = np.meshgrid(np.deg2rad(elv), np.deg2rad(brg), indexing="ij")
+        e, b = e.ravel(), b.ravel()
+        dirs = np.stack([np.cos(e) * np.cos(b), np.cos(e) * np.sin(b), -np.sin(e)], -1)
+        axis = np.stack([np.rad2deg(b), np.rad2deg(e)], -1)
+        return axis, dirs, "3d"
+    raise ConfigError("key 'beams': expected {start, stop, count} (cone angles, deg) or "
+                      "{bearings = [...], elevations = [...]} (deg)")
+
+
+def pair_directions(dirs: np.ndarray, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray]:
+    """Group beams into unique directions up to sign.
+
+    Returns ``(unique (U, 3), uidx (B,), sign (B,))`` with ``dirs[b] = sign[b] ·
+    unique[uidx[b]]``.
+    """
+    uniq: list[np.ndarray] = []
+    uidx = np.empty(len(dirs), np.int64)
+    sign = np.empty(len(dirs), np.float32)
+    for b, d in enumerate(dirs):
+        for i, u in enumerate(uniq):
+            if np.max(np.abs(d - u)) < tol:
+                uidx[b], sign[b] = i, 1.0
+                break
+            if np.max(np.abs(d + u)) < tol:
+                uidx[b], sign[b] = i, -1.0
+                break
+        else:
+            uidx[b], sign[b] = len(uniq), 1.0
+            uniq.append(d)
+    return np.array(uniq).reshape(-1, 3), uidx, sign
+
+
+def element_delays(positions: np.ndarray, unique_dirs: np.ndarray, mode: str,
+                   sound_speed: float) -> np.ndarray:
+    """Plane-wave advances τ (U, C) s of each element over the centroid for each direction."""
+    p = np.asarray(positions, float)
+    rel = p - p.mean(axis=0)
+    if mode == "cone":
+        rel = rel.copy()
+        rel[:, 1:] = 0.0  # cone beams: projection on the array (body x) axis only
+    return (unique_dirs @ rel.T) / sound_speed
+
+
+@register
+class CBF(Stage):
+    """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
+
+    kind = "cbf"
+    params = {
+        "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive),
+        "hop": Param("int", 0, "samples between snapshots (0: nfft/2)"),
+        "window": Param("str", "hann", "time taper of each snapshot", choices=WINDOWS),
+        "band": Param("band", None, "[lo, hi] Hz of the bins to beamform (default: all)"),
+        "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
+                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+        "shading": Param("str", "none", "array shading", choices=SHADINGS),
+        "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB",
+                             check=positive),
+        "batch": Param("int", 32, "snapshots per GEMM batch (and per output block)",
+                       check=positive),
+        "threads": Param("int", 0, "worker threads over frequency bins (0: all cores)"),
+    }
+
+    def validate(self) -> None:
+        w = f"stage {self.name!r}"
+        if self.hop == 0:
+            self.hop = max(1, self.nfft // 2)
+        if not 0 < self.hop:
+            raise ConfigError(f"{w}: key 'hop' must be > 0, got {self.hop}")
+        if self.threads < 0:
+            raise ConfigError(f"{w}: key 'threads' must be >= 0, got {self.threads}")
+        if self.band is not None and self.band[0] < 0:
+            raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {self.band}")
+        try:
+            self.beam_axis, self._dirs, self.beam_mode = beam_directions(self.beams)
+        except ConfigError as e:
+            raise ConfigError(f"{w}: {e}") from None
+        self._unique, self._uidx, self._sign = pair_directions(self._dirs)
+        self._win = time_window(self.window, self.nfft).astype(np.float32)
+        self._key = None
+
+    # -- set-up per stream -------------------------------------------------------------
+    def _prepare(self, b: Block) -> None:
+        """(Re)build the bin selection and steering matrix for this block's fs and positions."""
+        is_complex = np.iscomplexobj(b.data)
+        fc = float(b.meta.get("fc", 0.0)) if is_complex else 0.0
+        key = (b.fs, is_complex, fc, b.positions.shape, b.positions.tobytes(),
+               self.ctx.sound_speed)
+        if key == self._key:
+            return
+        self._key = key
+        fs = b.fs
+        if is_complex:  # complex baseband around fc (dft_filter complex = true)
+            f_all = fc + np.fft.fftfreq(self.nfft, 1.0 / fs)
+        else:
+            f_all = np.fft.rfftfreq(self.nfft, 1.0 / fs)
+        lo, hi = (self.band if self.band is not None else (-np.inf, np.inf))
+        idx = np.flatnonzero((f_all >= lo) & (f_all <= hi))
+        if idx.size == 0:
+            raise ConfigError(f"stage {self.name!r}: key 'band' {self.band} holds no DFT bin "
+                              f"(fs = {fs:g} Hz, nfft = {self.nfft})")
+        idx = idx[np.argsort(f_all[idx], kind="stable")]
+        self._complex = is_complex
+        self._bins = idx
+        self._contig = bool(np.all(np.diff(idx) == 1))
+        self.freqs = f_all[idx]
+        weights = shading_weights(self.shading, b.positions, self.sidelobe_db)
+        delays = element_delays(b.positions, self._unique, self.beam_mode, self.ctx.sound_speed)
+        g = np.empty((idx.size, b.positions.shape[0], 2 * len(self._unique)), np.float32)
+        kb.steering_real(self.freqs.astype(np.float64), delays, weights.astype(np.float64), g)
+        self._steer = g
+        self.weights = weights
+
+    def steering_matrix(self) -> np.ndarray:
+        """Complex steering weights (F, B, C) applied to the DFTs (for references and tests)."""
+        g = self._steer
+        c = (g[:, :, 0::2] + 1j * g[:, :, 1::2]).transpose(0, 2, 1)
+        out = c[:, self._uidx, :]
+        neg = self._sign < 0
+        out[:, neg, :] = np.conj(out[:, neg, :])
+        return out
+
+    # -- compute -----------------------------------------------------------------------
+    def beamform(self, frames: np.ndarray) -> np.ndarray:
+        """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`)."""
+        s_n, nfft, n_ch = frames.shape
+        rows = max(s_n, self.batch)  # one FFT plan per stream: short batches are zero-padded
+        n_thr = self.threads or (os.cpu_count() or 1)
+        kind, dt = ("fft", np.complex64) if self._complex else ("rfft", np.float32)
+        plan = fft.buffered_plan(kind, (rows, n_ch, nfft), dt)
+        frames = frames.astype(dt, copy=False)
+        win = self._win.astype(dt)
+        if rows > s_n:
+            plan.input[s_n:] = 0
+        cuts = np.linspace(0, s_n, min(n_thr, s_n) + 1).astype(int)
+        jobs = [(a, e) for a, e in zip(cuts[:-1], cuts[1:]) if e > a]
+
+        def taper(ae: tuple[int, int]) -> None:
+            kb.window_transpose(frames[ae[0]:ae[1]], win, plan.input[ae[0]:ae[1]])
+
+        if len(jobs) > 1:
+            list(_pool(n_thr).map(taper, jobs))
+        else:
+            taper(jobs[0])
+        spec = plan()  # (rows, C, F_all), owned by the plan
+        first = int(self._bins[0])
+        if not self._contig:
+            spec, first = np.ascontiguousarray(spec[:, :, self._bins]), 0
+        nf = self._bins.size
+        nb = self._uidx.size
+        y = np.empty((s_n, nf, nb), np.complex64)
+        steer, uidx, sign = self._steer, self._uidx, self._sign
+
+        def task(a: int) -> None:
+            e = min(nf, a + BINS_PER_TASK)
+            x2 = np.empty((e - a, 2 * s_n, n_ch), np.float32)
+            kb.pack_bins(spec, first + a, x2)
+            z = np.matmul(x2, steer[a:e])
+            kb.unpack_beams(z, uidx, sign, y, a)
+
+        starts = range(0, nf, BINS_PER_TASK)
+        if n_thr <= 1:
+            old = set_local_threads(1)
+            try:
+                for a in starts:
+                    task(a)
+            finally:
+                if old is not None:
+                    set_local_threads(old)
+        else:
+            list(_pool(n_thr).map(task, starts))
+        return y
+
+    def _headings(self, times: np.ndarray, fallback: float) -> np.ndarray:
+        rec = self.ctx.recording
+        if rec is not None and getattr(rec, "nav", None) is not None:
+            return rec.nav.at(times)[1]
+        return np.full(times.shape, fallback)
+
+    def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        fb = FrameBuffer(self.nfft, self.hop)
+        pend_frames: list[np.ndarray] = []
+        pend_starts: list[np.ndarray] = []
+        last: Block | None = None
+        index = 0
+
+        def emit() -> Block:
+            nonlocal index
+            frames = np.concatenate(pend_frames) if len(pend_frames) > 1 else pend_frames[0]
+            starts = np.concatenate(pend_starts) if len(pend_starts) > 1 else pend_starts[0]
+            pend_frames.clear()
+            pend_starts.clear()
+            y = self.beamform(frames)
+            fs = last.fs
+            times = (starts + 0.5 * self.nfft) / fs
+            heading = last.pose.heading if last.pose is not None else 0.0
+            headings = self._headings(times, heading)
+            t0 = starts[0] / fs
+            out = Block(y, ("snapshot", "freq", "beam"), t0,
+                        (starts[-1] - starts[0] + self.nfft) / fs, fs, last.positions,
+                        last.pose, self.freqs, self.beam_axis, index,
+                        {"times": times, "headings": headings, "starts": starts,
+                         "nfft": self.nfft, "hop": self.hop, "window": self.window,
+                         "shading": self.shading, "beam_mode": self.beam_mode,
+                         "df": fs / self.nfft})
+            index += y.shape[0]
+            return out
+
+        for b in blocks:
+            if b.domain != ("time", "channel"):
+                raise ConfigError(f"stage {self.name!r}: needs time-domain input, got "
+                                  f"{b.domain}")
+            if last is not None and (b.positions.shape != last.positions.shape
+                                     or not np.array_equal(b.positions, last.positions)
+                                     or b.fs != last.fs) and pend_frames:
+                yield emit()  # geometry changed: flush with the old steering
+            self._prepare(b)
+            last = b
+            frames, starts = fb.push(b)
+            if frames.shape[0]:
+                pend_frames.append(frames)
+                pend_starts.append(starts)
+            n_pend = sum(f.shape[0] for f in pend_frames)
+            while n_pend >= self.batch:
+                allf = np.concatenate(pend_frames) if len(pend_frames) > 1 else pend_frames[0]
+                alls = np.concatenate(pend_starts) if len(pend_starts) > 1 else pend_starts[0]
+                pend_frames[:] = [allf[: self.batch]]
+                pend_starts[:] = [alls[: self.batch]]
+                rest_f, rest_s = allf[self.batch:], alls[self.batch:]
+                yield emit()
+                if rest_f.shape[0]:
+                    pend_frames.append(rest_f)
+                    pend_starts.append(rest_s)
+                n_pend = rest_f.shape[0]
+        if pend_frames and last is not None:
+            yield emit()
+
+    def warmup_seconds(self, fs: float) -> float:
+        return self.nfft / fs
+
+
+def beam_power_reference(frames: np.ndarray, fs: float, positions: np.ndarray,
+                         cone_deg: np.ndarray, band: tuple[float, float], c: float,
+                         window: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Plain numpy CBF of one frame (nfft, C) for cone beams: reference for tests and bench.
+
+    Returns ``(freqs (F,), Y (F, B) complex)``, same conventions as :class:`CBF`.
+    """
+    nfft = frames.shape[0]
+    w = np.ones(nfft) if window is None else window
+    spec = np.fft.rfft(frames * w[:, None], axis=0)
+    f = np.fft.rfftfreq(nfft, 1 / fs)
+    sel = (f >= band[0]) & (f <= band[1])
+    x = positions[:, 0] - positions[:, 0].mean()
+    tau = np.cos(np.deg2rad(cone_deg))[:, None] * x[None, :] / c
+    steer = np.exp(-2j * math.pi * f[sel, None, None] * tau[None])
+    return f[sel], np.einsum("fbc,fc->fb", steer, spec[sel])
