@@ -1,0 +1,539 @@
+"""Scenario files (TOML) → validated, typed scenario objects (format in docs/formats.md).
+
+Every user mistake (unknown key, wrong type, missing key, impossible value) raises one
+:class:`ConfigError` naming the file and the key, before anything is written.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..io.geometry import line_array
+from ..kernels.fracdelay import PASSBAND
+from ..kinematics import KNOT, Trajectory
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SPEED_MODEL_REF = 5.14  # m/s (10 kn), SPL paper eq. (12)
+
+
+# -- small typed readers -------------------------------------------------------------------
+class _Table:
+    """A TOML table being read: tracks used keys so unknown ones can be reported."""
+
+    def __init__(self, data: Any, where: str, file: str) -> None:
+        if not isinstance(data, dict):
+            raise ConfigError(f"{file}: {where} must be a table")
+        self.d = data
+        self.where = where
+        self.file = file
+        self.used: set[str] = set()
+
+    def err(self, key: str, msg: str) -> ConfigError:
+        return ConfigError(f"{self.file}: {self.where}.{key}: {msg}")
+
+    def has(self, key: str) -> bool:
+        return key in self.d
+
+    def raw(self, key: str, default: Any = None) -> Any:
+        self.used.add(key)
+        return self.d.get(key, default)
+
+    def num(self, key: str, default: float | None = None, *, required: bool = False,
+            positive: bool = False, nonneg: bool = False) -> float | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a number is required)")
+            return default
+        v = self.d[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.err(key, f"must be a number, got {type(v).__name__} {v!r}")
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.err(key, "must be finite")
+        if positive and v <= 0:
+            raise self.err(key, f"must be > 0, got {v}")
+        if nonneg and v < 0:
+            raise self.err(key, f"must be >= 0, got {v}")
+        return v
+
+    def int_(self, key: str, default: int | None = None, *, required: bool = False,
+             minimum: int | None = None) -> int | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (an integer is required)")
+            return default
+        v = self.d[key]
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.err(key, f"must be an integer, got {type(v).__name__} {v!r}")
+        if minimum is not None and v < minimum:
+            raise self.err(key, f"must be >= {minimum}, got {v}")
+        return int(v)
+
+    def str_(self, key: str, default: str | None = None, *, required: bool = False,
+             choices: tuple[str, ...] | None = None) -> str | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a string is required)")
+            return default
+        v = self.d[key]
+        if not isinstance(v, str):
+            raise self.err(key, f"must be a string, got {type(v).__name__} {v!r}")
+        if choices is not None and v not in choices:
+            raise self.err(key, f"must be one of {', '.join(choices)}, got {v!r}")
+        return v
+
+    def bool_(self, key: str, default: bool) -> bool:
+        self.used.add(key)
+        if key not in self.d:
+            return default
+        v = self.d[key]
+        if not isinstance(v, bool):
+            raise self.err(key, f"must be true or false, got {v!r}")
+        return v
+
+    def vec(self, key: str, n: int | None = None, default: Any = None, *,
+            required: bool = False) -> np.ndarray | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a list of numbers is required)")
+            return None if default is None else np.asarray(default, float)
+        v = self.d[key]
+        ok = isinstance(v, list) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+        if not ok or (n is not None and len(v) != n):
+            what = f"{n} numbers" if n is not None else "a list of numbers"
+            raise self.err(key, f"must be {what}, got {v!r}")
+        a = np.asarray(v, dtype=float)
+        if not np.all(np.isfinite(a)):
+            raise self.err(key, "must be finite")
+        return a
+
+    def matrix(self, key: str, ncol: int, *, required: bool = False) -> np.ndarray | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, f"missing (a list of [{ncol} numbers] rows is required)")
+            return None
+        v = self.d[key]
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            a = None
+        if (a is None or a.ndim != 2 or a.shape[1] != ncol or a.shape[0] == 0
+                or any(isinstance(x, bool) for row in v for x in row)):
+            raise self.err(key, f"must be a list of rows of {ncol} numbers, got {v!r}")
+        if not np.all(np.isfinite(a)):
+            raise self.err(key, "must be finite")
+        return a
+
+    def sub(self, key: str, required: bool = False) -> _Table | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise ConfigError(f"{self.file}: [{self.where}.{key}] is missing")
+            return None
+        return _Table(self.d[key], f"{self.where}.{key}", self.file)
+
+    def subs(self, key: str) -> list[_Table]:
+        """An array of tables (``[[where.key]]``), possibly empty."""
+        self.used.add(key)
+        v = self.d.get(key, [])
+        if isinstance(v, dict):
+            v = [v]
+        if not isinstance(v, list):
+            raise self.err(key, "must be an array of tables")
+        return [_Table(x, f"{self.where}.{key}[{i}]", self.file) for i, x in enumerate(v)]
+
+    def done(self) -> None:
+        unknown = sorted(set(self.d) - self.used)
+        if unknown:
+            raise ConfigError(f"{self.file}: {self.where}: unknown key {unknown[0]!r}")
+
+
+def _speed(t: _Table, required: bool = True) -> float | None:
+    """``speed`` (m/s) or ``speed_kn`` (knots)."""
+    if t.has("speed") and t.has("speed_kn"):
+        raise t.err("speed", "give speed (m/s) or speed_kn (knots), not both")
+    if t.has("speed_kn"):
+        return t.num("speed_kn", nonneg=True) * KNOT
+    return t.num("speed", 0.0 if not required else None, required=required, nonneg=True)
+
+
+def _trajectory(t: _Table, need_motion: bool = True) -> tuple[Trajectory, bool]:
+    """``start`` [x, y] and either ``course``+``speed``/``speed_kn`` or ``[[leg]]``s, or
+    ``heading`` (static). Returns (trajectory, static)."""
+    start = t.vec("start", 2, default=[0.0, 0.0])
+    legs_t = t.subs("leg")
+    if legs_t:
+        if t.has("course") or t.has("speed") or t.has("speed_kn"):
+            raise t.err("leg", "give legs or course/speed, not both")
+        legs = []
+        for lt in legs_t:
+            leg = {"course": lt.num("course", required=True), "speed": _speed(lt),
+                   "duration": lt.num("duration", required=True, nonneg=True)}
+            if lt.has("turn_rate"):
+                leg["turn_rate"] = lt.num("turn_rate", positive=True)
+            if lt.has("turn"):
+                leg["turn"] = lt.str_("turn", choices=("shortest", "port", "starboard"))
+            lt.done()
+            legs.append(leg)
+        try:
+            return Trajectory.from_legs(start, legs), False
+        except ConfigError as e:
+            raise ConfigError(f"{t.file}: {t.where}: {e}") from None
+    if t.has("course") or t.has("speed") or t.has("speed_kn"):
+        course = t.num("course", required=True)
+        speed = _speed(t)
+        # one open-ended leg (held after its end by Trajectory)
+        traj = Trajectory.from_legs(start, [{"course": course, "speed": speed, "duration": 0.0}])
+        return traj, speed == 0.0
+    heading = t.num("heading", 0.0)
+    if need_motion and not t.has("heading"):
+        pass
+    return Trajectory.static(start, heading), True
+
+
+# -- scenario objects ----------------------------------------------------------------------
+@dataclass
+class Tonal:
+    freq: float  # Hz
+    level_db: float  # dB re 1 µPa @ 1 m (RMS)
+    phase_deg: float | None = None  # None: random (seeded)
+
+
+@dataclass
+class Broadband:
+    band: tuple[float, float]  # Hz
+    level_db: float | None  # spectral, dB re 1 µPa²/Hz @ 1 m (None with model="speed")
+    model: str = "flat"  # "flat" | "speed" (SPL paper eq. (12))
+    slope_db_per_octave: float = 0.0  # colour within the band, relative to the band's low edge
+
+
+@dataclass
+class SourceSpec:
+    name: str
+    traj: Trajectory
+    depth: float
+    tonals: list[Tonal] = field(default_factory=list)
+    broadband: Broadband | None = None
+    lead: float = 0.0  # s (tow ship: position of the ownship track this much later)
+    kind: str = "source"  # "source" | "towship"
+
+
+@dataclass
+class ArraySpec:
+    positions: np.ndarray  # (n, 3) nominal, body frame
+    depth: float
+    position_error_std: float = 0.0
+    lateral_std: float = 0.0
+    lateral_snapshot: float = 1.0
+
+
+@dataclass
+class Propagation:
+    loss: str = "spherical"  # spherical | cylindrical | table
+    transition_range: float = 1.0
+    table_range: np.ndarray | None = None  # m
+    table_tl: np.ndarray | None = None  # dB, or a TLTable object resolved per depth pair
+    table_path: str | None = None
+
+
+@dataclass
+class NoiseSpec:
+    level_db: float | None = None  # dB re 1 µPa²/Hz
+    spectrum: np.ndarray | None = None  # (n, 2): freq Hz, level dB
+
+
+@dataclass
+class TargetSpec:
+    name: str
+    traj: Trajectory | None
+    depth: float
+    ts_db: float
+    distortion: float = 0.0  # s, thesis eq. (4.6) α
+    source: str | None = None  # reuse a passive source's track
+
+
+@dataclass
+class ClutterSpec:
+    count: int
+    area: np.ndarray  # [xmin, xmax, ymin, ymax] m
+    depth: float
+    ts_mean_db: float
+    ts_std_db: float
+
+
+@dataclass
+class ActiveSpec:
+    waveform: Any  # arrayproc.waveforms.Waveform
+    level_db: float
+    interval: float
+    first: float
+    count: int | None
+    offset: np.ndarray
+    direct: bool
+    targets: list[TargetSpec]
+    clutter: ClutterSpec | None
+
+
+@dataclass
+class Scenario:
+    path: str
+    fs: float
+    duration: float
+    sound_speed: float
+    seed: int
+    start_time: str | None
+    chunk: int
+    truth_interval: float
+    nav_interval: float
+    array: ArraySpec
+    ownship: Trajectory
+    ownship_static: bool
+    sources: list[SourceSpec]
+    propagation: Propagation
+    noise: NoiseSpec | None
+    active: ActiveSpec | None
+
+
+def tetrahedron(side: float) -> np.ndarray:
+    """Regular tetrahedron (4, 3) with edge ``side`` (m), centroid at the origin: a horizontal
+    base triangle (one vertex forward) and the apex above it (z down, so apex z < 0)."""
+    rb = side / math.sqrt(3.0)
+    h = side * math.sqrt(2.0 / 3.0)
+    ang = np.deg2rad([0.0, 120.0, 240.0])
+    base = np.stack([rb * np.cos(ang), rb * np.sin(ang), np.full(3, h / 4)], axis=1)
+    return np.vstack([base, [[0.0, 0.0, -0.75 * h]]])
+
+
+def _tonals(t: _Table, fs: float) -> list[Tonal]:
+    out = []
+    raw = t.raw("tonals", [])
+    if not isinstance(raw, list):
+        raise t.err("tonals", "must be a list of {freq, level_db} tables")
+    for i, x in enumerate(raw):
+        tt = _Table(x, f"{t.where}.tonals[{i}]", t.file)
+        f = tt.num("freq", required=True, positive=True)
+        if f > PASSBAND * fs:
+            raise tt.err("freq", f"{f} Hz is above the simulator's band "
+                         f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
+        out.append(Tonal(f, tt.num("level_db", required=True), tt.num("phase_deg", None)))
+        tt.done()
+    return out
+
+
+def _broadband(t: _Table | None, fs: float) -> Broadband | None:
+    if t is None:
+        return None
+    band = t.vec("band", 2, required=True)
+    if not (0 <= band[0] < band[1]):
+        raise t.err("band", f"must be [lo, hi] with 0 <= lo < hi, got {band.tolist()}")
+    if band[1] > PASSBAND * fs:
+        raise t.err("band", f"upper edge {band[1]} Hz is above the simulator's band "
+                    f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
+    model = t.str_("model", "flat", choices=("flat", "speed"))
+    level = t.num("level_db", None, required=(model == "flat"))
+    if model == "speed" and level is not None:
+        raise t.err("level_db", "not used with model = \"speed\" (the level follows the speed)")
+    slope = t.num("slope_db_per_octave", 0.0)
+    t.done()
+    return Broadband((float(band[0]), float(band[1])), level, model, slope)
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file."""
+    p = Path(path)
+    if not p.exists():
+        raise ConfigError(f"{p}: no such scenario file")
+    try:
+        data = tomllib.loads(p.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ConfigError(f"{p}: not valid TOML ({e})") from None
+    except OSError as e:
+        raise ConfigError(f"{p}: cannot read ({e})") from None
+    return parse_scenario(data, str(p), base_dir=p.parent)
+
+
+def parse_scenario(data: dict, file: str = "<scenario>",
+                   base_dir: Path | None = None) -> Scenario:
+    """Validate a scenario given as a dict (as loaded from TOML)."""
+    root = _Table(data, "scenario", file)
+    rec = root.sub("recording", required=True)
+    fs = rec.num("fs", required=True, positive=True)
+    duration = rec.num("duration", required=True, positive=True)
+    c = rec.num("sound_speed", 1500.0, positive=True)
+    seed = rec.int_("seed", 0, minimum=0)
+    start_time = rec.str_("start_time", None)
+    chunk = rec.int_("chunk", 8192, minimum=64)
+    truth_interval = rec.num("truth_interval", 1.0, positive=True)
+    nav_interval = rec.num("nav_interval", 1.0, positive=True)
+    rec.done()
+
+    # array
+    at = root.sub("array", required=True)
+    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron"))
+    if kind == "line":
+        n = at.int_("n", required=True, minimum=1)
+        spacing = at.num("spacing", required=True, positive=True)
+        pos = line_array(n, spacing)
+    elif kind == "tetrahedron":
+        pos = tetrahedron(at.num("side", required=True, positive=True))
+    else:
+        pos = at.matrix("positions", 3, required=True)
+    array = ArraySpec(pos, at.num("depth", 0.0),
+                      at.num("position_error_std", 0.0, nonneg=True),
+                      at.num("lateral_std", 0.0, nonneg=True),
+                      at.num("lateral_snapshot", 1.0, positive=True))
+    at.done()
+
+    # ownship
+    ot = root.sub("ownship")
+    if ot is None:
+        own, own_static = Trajectory.static((0.0, 0.0), 0.0), True
+    else:
+        own, own_static = _trajectory(ot)
+        ot.done()
+
+    # sources
+    sources: list[SourceSpec] = []
+    names: set[str] = set()
+    for i, st in enumerate(root.subs("source")):
+        name = st.str_("name", f"source{i}")
+        if name in names or name in ("ownship", "towship"):
+            raise st.err("name", f"duplicate or reserved source name {name!r}")
+        names.add(name)
+        traj, _ = _trajectory(st)
+        depth = st.num("depth", 0.0)
+        tonals = _tonals(st, fs)
+        bb = _broadband(st.sub("broadband"), fs)
+        st.done()
+        if not tonals and bb is None:
+            raise ConfigError(f"{file}: {st.where}: a source needs tonals or [broadband]")
+        sources.append(SourceSpec(name, traj, depth, tonals, bb))
+
+    # propagation
+    prop = Propagation()
+    pt = root.sub("propagation")
+    if pt is not None:
+        prop.loss = pt.str_("loss", "spherical", choices=("spherical", "cylindrical", "table"))
+        prop.transition_range = pt.num("transition_range", 1.0, positive=True)
+        if prop.loss == "table":
+            if pt.has("file"):
+                f = Path(pt.str_("file"))
+                if not f.is_absolute() and base_dir is not None:
+                    f = base_dir / f
+                if not f.exists():
+                    raise pt.err("file", f"no such TL table {str(f)!r}")
+                prop.table_path = str(f)
+            else:
+                r = pt.vec("range_m", required=True)
+                tl = pt.vec("tl_db", required=True)
+                if r.size != tl.size or r.size < 2 or np.any(np.diff(r) <= 0):
+                    raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
+                                 "and range_m must increase")
+                prop.table_range, prop.table_tl = r, tl
+        pt.done()
+
+    # noise (+ tow ship)
+    noise = None
+    nt = root.sub("noise")
+    if nt is not None:
+        lvl = nt.num("level_db", None)
+        spec = nt.matrix("spectrum", 2)
+        if lvl is not None and spec is not None:
+            raise nt.err("spectrum", "give level_db (flat) or spectrum, not both")
+        if spec is not None and (np.any(spec[:, 0] <= 0) or np.any(np.diff(spec[:, 0]) <= 0)):
+            raise nt.err("spectrum", "frequencies must be > 0 and increasing")
+        if lvl is not None or spec is not None:
+            noise = NoiseSpec(lvl, spec)
+        tt = nt.sub("towship")
+        if tt is not None:
+            dist = tt.num("distance", 300.0)
+            depth = tt.num("depth", 5.0)
+            tonals = _tonals(tt, fs)
+            bb = _broadband(tt.sub("broadband"), fs)
+            tt.done()
+            if not tonals and bb is None:
+                raise ConfigError(f"{file}: {tt.where}: the tow ship needs tonals or "
+                                  "[broadband]")
+            sources.append(SourceSpec("towship", own, depth, tonals, bb, lead=dist,
+                                      kind="towship"))
+        nt.done()
+
+    active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
+    root.done()
+    return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
+                    nav_interval, array, own, own_static, sources, prop, noise, active)
+
+
+def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
+    from .. import waveforms as wf
+
+    kind = t.str_("waveform", required=True, choices=("bpsk", "hfm", "cw"))
+    dur = t.num("duration", required=True, positive=True)
+    taper = t.num("taper", 0.05, nonneg=True)
+    try:
+        if kind == "bpsk":
+            w = wf.bpsk(t.num("fc", required=True, positive=True), dur,
+                        t.int_("bits", 1023, minimum=3), taper)
+        elif kind == "hfm":
+            w = wf.hfm(t.num("f0", required=True, positive=True),
+                       t.num("f1", required=True, positive=True), dur, taper)
+        else:
+            w = wf.cw(t.num("fc", required=True, positive=True), dur, taper)
+    except ValueError as e:
+        raise ConfigError(f"{file}: {t.where}: {e}") from None
+    if w.band[1] > PASSBAND * fs:
+        raise t.err("waveform", f"band up to {w.band[1]:g} Hz is above the simulator's band "
+                    f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
+    level = t.num("level_db", required=True)
+    interval = t.num("interval", required=True, positive=True)
+    first = t.num("first", 0.0, nonneg=True)
+    count = t.int_("count", None, minimum=1)
+    offset = t.vec("offset", 3, default=[0.0, 0.0, 0.0])
+    direct = t.bool_("direct", True)
+    targets = []
+    by_name = {s.name: s for s in sources}
+    for i, tt in enumerate(t.subs("target")):
+        name = tt.str_("name", f"target{i}")
+        src = tt.str_("source", None)
+        if src is not None:
+            if src not in by_name:
+                raise tt.err("source", f"no [[source]] named {src!r}")
+            traj, depth = by_name[src].traj, by_name[src].depth
+            if tt.has("depth"):
+                depth = tt.num("depth")
+        else:
+            traj, _ = _trajectory(tt)
+            depth = tt.num("depth", 0.0)
+        ts = tt.num("ts_db", required=True)
+        alpha = tt.num("distortion_ms", 0.0, nonneg=True) * 1e-3
+        tt.done()
+        targets.append(TargetSpec(name, traj, depth, ts, alpha, src))
+    clutter = None
+    ct = t.sub("clutter")
+    if ct is not None:
+        area = ct.vec("area", 4, required=True)
+        if not (area[0] < area[1] and area[2] < area[3]):
+            raise ct.err("area", "must be [xmin, xmax, ymin, ymax] with min < max")
+        clutter = ClutterSpec(ct.int_("count", required=True, minimum=0), area,
+                              ct.num("depth", 0.0), ct.num("ts_mean_db", -10.0),
+                              ct.num("ts_std_db", 5.0, nonneg=True))
+        ct.done()
+    t.done()
+    return ActiveSpec(w, level, interval, first, count, offset, direct, targets, clutter)

@@ -1,0 +1,107 @@
+"""Radiated signals of the passive sources at 1 m, sampled at the source rate (2 × fs).
+
+A source's signal s(t) (Pa at 1 m, t = emission time in s since the recording's start) is the
+sum of
+- tonals A cos(2π f t + φ), A = √2 · 1 µPa · 10^(SL/20) (SL = RMS level, dB re 1 µPa @ 1 m),
+  φ given or drawn from the source's own seeded stream;
+- band-limited Gaussian noise of one-sided spectral level L (dB re 1 µPa²/Hz @ 1 m) over
+  [lo, hi], optionally tilted by ``slope_db_per_octave``; with ``model = "speed"`` the band's
+  total level follows SPL paper eq. (12), SL(v) = 170 + 53 log10(v / 5.14 m/s) dB re 1 µPa
+  @ 1 m (log10, Ross' trend), spread over the band, with v the source's speed at emission.
+
+Sample m is at time m / fs_src; blocks are requested by absolute index (negative before the
+recording's start), so chunking never changes a value.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .motion import TrackMover
+from .scenario import SPEED_MODEL_REF, Broadband, SourceSpec
+from .signals import UPA2, ShapedNoise
+
+KEY_TONAL = 11
+KEY_BROADBAND = 12
+
+
+def tonal_amplitude(level_db: float) -> float:
+    """Peak amplitude (Pa at 1 m) of a tonal of RMS level ``level_db`` dB re 1 µPa @ 1 m."""
+    return float(np.sqrt(2.0) * 1e-6 * 10 ** (level_db / 20.0))
+
+
+def speed_source_level(speed: np.ndarray | float) -> np.ndarray:
+    """Broadband source level (dB re 1 µPa @ 1 m) from speed (m/s), SPL paper eq. (12)."""
+    v = np.maximum(np.asarray(speed, dtype=float), 1e-6)
+    return 170.0 + 53.0 * np.log10(v / SPEED_MODEL_REF)
+
+
+def band_shape(bb: Broadband):
+    """Relative PSD shape in the band (1 at the low edge, or at 1 Hz when lo < 1 Hz)."""
+    lo, hi = bb.band
+    fref = max(lo, 1.0)
+    slope = bb.slope_db_per_octave
+
+    def shape(f: np.ndarray) -> np.ndarray:
+        f = np.asarray(f, dtype=float)
+        inside = (f >= lo) & (f <= hi)
+        s = 10 ** (slope * np.log2(np.maximum(f, 1e-9) / fref) / 10.0)
+        return np.where(inside, s, 0.0)
+
+    return shape
+
+
+def band_equivalent_width(bb: Broadband) -> float:
+    """∫ shape(f) df over the band (Hz): the band's power per unit spectral level."""
+    f = np.linspace(bb.band[0], bb.band[1], 4001)
+    s = band_shape(bb)(f)
+    return float(np.sum((s[1:] + s[:-1]) * 0.5 * np.diff(f)))
+
+
+class SourceSignal:
+    """The signal a passive source radiates, by absolute source-sample index."""
+
+    def __init__(self, spec: SourceSpec, mover: TrackMover, fs_src: float, seed: int,
+                 index: int) -> None:
+        self.spec = spec
+        self.mover = mover
+        self.fs_src = float(fs_src)
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(KEY_TONAL, index)))
+        rand_phase = rng.uniform(0.0, 2 * np.pi, len(spec.tonals))
+        self.freqs = np.array([t.freq for t in spec.tonals], dtype=float)
+        self.amps = np.array([tonal_amplitude(t.level_db) for t in spec.tonals])
+        self.phases = np.array([np.deg2rad(t.phase_deg) if t.phase_deg is not None
+                                else rand_phase[i] for i, t in enumerate(spec.tonals)])
+        self.noise = None
+        bb = spec.broadband
+        if bb is not None:
+            shape = band_shape(bb)
+            self.noise = ShapedNoise(fs_src, seed, (KEY_BROADBAND, index), 1,
+                                     psd=lambda f: UPA2 * shape(f), white_psd=UPA2)
+            self.bandwidth = band_equivalent_width(bb)
+
+    def spectral_level_db(self, t: np.ndarray) -> np.ndarray:
+        """Broadband spectral level at the band's reference frequency (dB re 1 µPa²/Hz @ 1 m)
+        at emission times t."""
+        bb = self.spec.broadband
+        t = np.asarray(t, dtype=float)
+        if bb.model == "flat":
+            return np.full(t.shape, bb.level_db)
+        v = np.hypot(*self.mover.state3(t)[1][:, :2].T)
+        return speed_source_level(v) - 10 * np.log10(self.bandwidth)
+
+    def block(self, m0: int, m1: int) -> np.ndarray:
+        """Samples m0 … m1−1 (float64, Pa at 1 m)."""
+        m = np.arange(m0, m1, dtype=np.int64)
+        out = np.zeros(m.size)
+        for f, a, ph in zip(self.freqs, self.amps, self.phases):
+            x = f * m.astype(float) / self.fs_src  # cycles; reduce before the cosine
+            out += a * np.cos(2 * np.pi * (x - np.floor(x)) + ph)
+        if self.noise is not None:
+            nb = self.noise.block(m0, m1)[:, 0]
+            if self.spec.broadband.model == "flat":
+                nb = nb * 10 ** (self.spec.broadband.level_db / 20.0)
+            else:
+                nb = nb * 10 ** (self.spectral_level_db(m / self.fs_src) / 20.0)
+            out += nb
+        return out
