@@ -1,0 +1,165 @@
+"""Track plots: ownship, estimate with covariance ellipses and truth; RMSE curves with the CRLB.
+
+Axes in km (positions) and minutes (time) as in the L-R paper's figures; x east, y north.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import h5py
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Ellipse
+
+from ..errors import FormatError
+from . import register_plot
+
+FILTER_STYLE = {"ekf": "tab:red", "ukf": "tab:blue", "ckf": "tab:green", "ghf": "tab:orange",
+                "srf": "tab:purple", "rpf": "tab:brown"}
+
+
+def _ellipse(ax, mean: np.ndarray, cov: np.ndarray, nsig: float = 2.0, **kw: Any) -> None:
+    """Draw the nsig-sigma ellipse of a 2×2 covariance (m²) around mean (m), in km."""
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    w = np.clip(w, 0.0, None)
+    ang = np.degrees(np.arctan2(v[1, 1], v[0, 1]))
+    ax.add_patch(Ellipse(mean / 1e3, 2 * nsig * np.sqrt(w[1]) / 1e3,
+                         2 * nsig * np.sqrt(w[0]) / 1e3, angle=ang, fill=False, **kw))
+
+
+def _read_truth(recording: str) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    if not recording or not os.path.exists(recording):
+        return out
+    try:
+        with h5py.File(recording, "r") as f:
+            if "truth/sources" in f:
+                for name, g in f["truth/sources"].items():
+                    if "position" in g:
+                        out[name] = np.asarray(g["position"][()], float)
+    except OSError:
+        return {}
+    return out
+
+
+@register_plot("track")
+def plot_track(tracks_path: str, out_png: str, ellipse_every: int = 5,
+               truth: Mapping[str, np.ndarray] | None = None, title: str | None = None,
+               **_: Any) -> None:
+    """Plan view of a tracks file: ownship, each track's estimate with 2σ position ellipses every
+    ``ellipse_every`` points, and the truth (from ``truth`` {name: (n, 2) m} or the recording's
+    ``/truth/sources`` when the tracks file names it)."""
+    from ..io.products import read_products
+
+    prod = read_products(tracks_path)
+    groups = [g for n, g in prod.items() if n != "/" and g.get("kind") == "tracks"]
+    if not groups:
+        raise FormatError(f"{tracks_path}: no tracks group")
+    g = groups[0]
+    root = prod["/"]
+    if truth is None:
+        rec = root.get("recording", "")
+        truth = _read_truth(rec.decode() if isinstance(rec, bytes) else str(rec))
+    fig, ax = plt.subplots(figsize=(7, 6))
+    if "own_x" in g:
+        ax.plot(g["own_x"] / 1e3, g["own_y"] / 1e3, "k-", lw=1.5, label="ownship")
+        ax.plot(g["own_x"][0] / 1e3, g["own_y"][0] / 1e3, "ko", ms=4)
+    for name, p in truth.items():
+        ax.plot(p[:, 0] / 1e3, p[:, 1] / 1e3, "g--", lw=1.5, label=f"truth {name}")
+    for tid in np.unique(g["track_id"]):
+        m = g["track_id"] == tid
+        x, y, cov = g["x"][m], g["y"][m], g["cov"][m]
+        ax.plot(x / 1e3, y / 1e3, "b.-", ms=3, lw=1, label=f"track {tid}")
+        for i in range(0, x.size, max(1, int(ellipse_every))):
+            _ellipse(ax, np.array([x[i], y[i]]), cov[i, :2, :2], ec="tab:blue", lw=0.6,
+                     alpha=0.6)
+    ax.set_xlabel("x east (km)")
+    ax.set_ylabel("y north (km)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title or f"{os.path.basename(tracks_path)} (2σ ellipses)")
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=120)
+    plt.close(fig)
+
+
+def plot_rmse(times_s: np.ndarray, curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
+              out_png: str, bound_pos_m: np.ndarray | None = None, title: str = "") -> None:
+    """Position and velocity RMSE against time for several filters ({name: (pos m, vel m/s)}),
+    with the position CRLB when given (L-R paper figs. 5 and 7)."""
+    t = np.asarray(times_s) / 60.0
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for name, (pos, vel) in curves.items():
+        c = FILTER_STYLE.get(name.split()[0].lower())
+        a1.plot(t, pos / 1e3, color=c, label=name.upper())
+        a2.plot(t, vel, color=c, label=name.upper())
+    if bound_pos_m is not None:
+        a1.plot(t, np.asarray(bound_pos_m) / 1e3, "k--", label="CRLB (zero process noise)")
+    a1.set_xlabel("time (min)")
+    a1.set_ylabel("position RMSE (km)")
+    a2.set_xlabel("time (min)")
+    a2.set_ylabel("velocity RMSE (m/s)")
+    a1.set_yscale("log")
+    a2.set_yscale("log")
+    for a in (a1, a2):
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=120)
+    plt.close(fig)
+
+
+def plot_bias(times_s: np.ndarray, curves: Mapping[str, np.ndarray], out_png: str,
+              title: str = "") -> None:
+    """Bias norm ‖mean position error‖ (m) against time (L-R paper fig. 6)."""
+    t = np.asarray(times_s) / 60.0
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for name, b in curves.items():
+        ax.plot(t, np.asarray(b) / 1e3, color=FILTER_STYLE.get(name.lower()),
+                label=name.upper())
+    ax.set_xlabel("time (min)")
+    ax.set_ylabel("position bias norm (km)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=120)
+    plt.close(fig)
+
+
+def plot_lr_example(own: np.ndarray, truth: np.ndarray, known: np.ndarray,
+                    resolved: np.ndarray, ghost: np.ndarray, weights: np.ndarray,
+                    times_s: np.ndarray, out_png: str, labels: Sequence[str] = (),
+                    title: str = "") -> None:
+    """One run (L-R paper fig. 4): ownship, truth, known-side estimate, L-R resolved estimate
+    and the ghost hypothesis (absolute positions, m) while its weight 1 − ω¹ is at least 1 %,
+    and the true-side weight ω¹ over time."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [3, 2]})
+    a1.plot(own[:, 0] / 1e3, own[:, 1] / 1e3, "k-", label="ownship")
+    a1.plot(truth[:, 0] / 1e3, truth[:, 1] / 1e3, "g-", lw=2, label="target (truth)")
+    a1.plot(resolved[:, 0] / 1e3, resolved[:, 1] / 1e3, "*-", color="tab:orange", ms=6,
+            lw=2.5, label="L-R resolved (eq. 12)")
+    a1.plot(known[:, 0] / 1e3, known[:, 1] / 1e3, "b.--", ms=3, lw=1, label="known side")
+    alive = np.flatnonzero(1.0 - np.asarray(weights) >= 0.01)
+    last = (alive.max() + 1) if alive.size else 1
+    a1.plot(ghost[:last, 0] / 1e3, ghost[:last, 1] / 1e3, "x:", color="tab:red", ms=4,
+            label="ghost hypothesis (while ω² ≥ 1 %)")
+    a1.set_xlabel("x east (km)")
+    a1.set_ylabel("y north (km)")
+    a1.set_aspect("equal", adjustable="datalim")
+    a1.grid(alpha=0.3)
+    a1.legend(fontsize=8)
+    a2.plot(np.asarray(times_s) / 60.0, weights, "o-", ms=3)
+    a2.set_xlabel("time (min)")
+    a2.set_ylabel("weight of the true-side filter ω¹")
+    a2.set_ylim(-0.05, 1.05)
+    a2.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=120)
+    plt.close(fig)
