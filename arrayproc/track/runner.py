@@ -1,0 +1,323 @@
+"""``arrayproc track``: run a bearings tracker on a products file and write a tracks file.
+
+Reads the ``bearings`` rows of a products file (DESIGN section 4) and the array's navigation
+from the recording named by the products file's root attribute ``source`` (DESIGN section 3,
+``/nav``), runs the filter chosen in the tracker TOML — with left-right resolution (L-R paper
+eqs. (9)-(13)) when the bearings come from a line array — and writes a ``tracks`` group
+(``time``, ``track_id``, ``x``, ``y``, ``vx``, ``vy``, ``cov`` (n, 4, 4), plus the ownship
+``own_x``, ``own_y`` used for plotting).
+
+Tracker TOML::
+
+    [tracker]
+    filter = "ukf"            # ekf | ukf | ckf | ghf | srf (FILTERS registry)
+    lr = true                 # two hypotheses on the port/starboard pair; false: one side
+    side = "starboard"        # with lr = false: which column to use (port | starboard)
+    model = "cv"              # cv | ct
+    sigma_bearing_deg = 1.5
+    q1 = 9.0e-6               # m²/s³, eq. (4); default the L-R paper's 1.944e-6 km²/min³
+    q2 = 1.75e-12             # rad²/s³, eq. (6)
+    range_m = 5000.0          # initialisation prior (Ristic et al. 2003 ch. 6)
+    sigma_range_m = 2000.0
+    speed_mps = 2.06
+    sigma_speed_mps = 1.03
+    sigma_course_deg = 51.96
+    sigma_turn_deg_s = 0.05
+    bearings = "bearings"     # products group (default: the only group of kind bearings)
+    nav = "rec.h5"            # optional: recording with /nav (default: the products' source)
+    [tracker.params]          # filter parameters, e.g. alpha/beta/kappa, gh_order, likelihood
+
+One target is tracked: at each time the row with the highest ``snr_db`` (else ``level_db``) is
+used. With ``lr``, the two members of each port/starboard pair are assigned to the two
+hypotheses by continuity (:func:`assign_by_continuity`), so a target crossing the array's axis
+keeps its hypothesis.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..errors import ArrayprocError, ConfigError, FormatError
+from ..kernels import track_core as kc
+from .filters import FILTERS, FilterDivergence, make_filter
+from .init import TrackPrior, init_from_bearing
+from .lr import LRResolver
+from .models import Q1_PAPER, Q2_PAPER, make_model
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+_PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
+               "sigma_turn_deg_s")
+_KEYS = {"filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings", "nav",
+         "params", *_PRIOR_KEYS}
+
+
+def load_tracker_config(path: str) -> dict[str, Any]:
+    """Read and check a tracker TOML; ConfigError naming the file and key on any problem."""
+    try:
+        with open(path, "rb") as fh:
+            text = fh.read()
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot read tracker config: {e.strerror}") from None
+    try:
+        doc = tomllib.loads(text.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    if "tracker" not in doc or not isinstance(doc["tracker"], dict):
+        raise ConfigError(f"{path}: missing [tracker] table")
+    cfg = dict(doc["tracker"])
+    for k in cfg:
+        if k not in _KEYS:
+            raise ConfigError(f"{path}: unknown key tracker.{k}")
+    cfg.setdefault("filter", "ukf")
+    cfg.setdefault("lr", True)
+    cfg.setdefault("model", "cv")
+    cfg.setdefault("sigma_bearing_deg", 1.5)
+    cfg.setdefault("q1", Q1_PAPER)
+    cfg.setdefault("q2", Q2_PAPER)
+    cfg.setdefault("params", {})
+    if cfg["filter"] not in FILTERS:
+        raise ConfigError(f"{path}: tracker.filter must be one of {', '.join(FILTERS)}, "
+                          f"not {cfg['filter']!r}")
+    if not isinstance(cfg["lr"], bool):
+        raise ConfigError(f"{path}: tracker.lr must be true or false")
+    if not cfg["lr"] and cfg.get("side") not in ("port", "starboard"):
+        raise ConfigError(f"{path}: tracker.side must be 'port' or 'starboard' when lr = false")
+    if not isinstance(cfg["params"], dict):
+        raise ConfigError(f"{path}: tracker.params must be a table")
+    for k in ("sigma_bearing_deg", "q1", "q2", *_PRIOR_KEYS):
+        if k in cfg:
+            v = cfg[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                    or v < 0 or (k in ("sigma_bearing_deg", "range_m") and v == 0):
+                raise ConfigError(f"{path}: tracker.{k} must be a positive number")
+    return cfg
+
+
+def _read_bearings(prod: dict, name: str | None, products_path: str) -> dict[str, np.ndarray]:
+    groups = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "bearings"]
+    if name is not None:
+        if name not in prod or name == "/":
+            raise FormatError(f"{products_path}: no group {name!r}")
+        g = prod[name]
+    elif len(groups) == 1:
+        g = prod[groups[0]]
+    elif not groups:
+        raise FormatError(f"{products_path}: no bearings group")
+    else:
+        raise ConfigError(f"{products_path}: several bearings groups ({', '.join(groups)}); "
+                          "choose one with tracker.bearings")
+    for k in ("time", "bearing_port_deg", "bearing_stbd_deg"):
+        if k not in g:
+            raise FormatError(f"{products_path}: bearings column {k!r} is missing")
+    t = np.asarray(g["time"], float).reshape(-1)
+    cols = {k: np.asarray(g[k], float).reshape(-1) for k in
+            ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db") if k in g}
+    if any(v.shape != t.shape for v in cols.values()):
+        raise FormatError(f"{products_path}: bearings columns have unequal lengths")
+    if t.size < 2:
+        raise FormatError(f"{products_path}: fewer than two bearing rows")
+    ok = np.isfinite(t) & np.isfinite(cols["bearing_port_deg"]) & \
+        np.isfinite(cols["bearing_stbd_deg"])
+    if not ok.any():
+        raise FormatError(f"{products_path}: bearings contain no finite rows")
+    score = cols.get("snr_db", cols.get("level_db", np.zeros_like(t)))
+    score = np.where(np.isfinite(score), score, -np.inf)
+    idx = np.flatnonzero(ok)
+    # one row per time: the strongest
+    order = np.lexsort((-score[idx], t[idx]))
+    idx = idx[order]
+    first = np.ones(idx.size, bool)
+    first[1:] = t[idx][1:] != t[idx][:-1]
+    idx = idx[first]
+    return {k: v[idx] for k, v in cols.items()}
+
+
+def _s(v: Any) -> str:
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _resolve(path: str, rel_to: str) -> str:
+    if os.path.isabs(path) or os.path.exists(path):
+        return path
+    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
+    return cand if os.path.exists(cand) else path
+
+
+def _read_nav(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time, position (n, 2), heading deg) of a recording's /nav; a static array at the origin
+    heading north when /nav is absent (DESIGN section 3)."""
+    if not os.path.exists(path):
+        raise FormatError(f"{path}: recording with the navigation not found (set tracker.nav)")
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise FormatError(f"{path}: not a readable HDF5 file") from None
+    with f:
+        if "nav" not in f:
+            return np.zeros(1), np.zeros((1, 2)), np.zeros(1)
+        g = f["nav"]
+        for k in ("time", "position", "heading"):
+            if k not in g:
+                raise FormatError(f"{path}: /nav/{k} is missing")
+        t = np.asarray(g["time"][()], float).reshape(-1)
+        pos = np.asarray(g["position"][()], float)
+        hd = np.asarray(g["heading"][()], float).reshape(-1)
+    if t.size == 0 or pos.shape != (t.size, 2) or hd.shape != t.shape:
+        raise FormatError(f"{path}: /nav time, position (n, 2) and heading shapes disagree")
+    if np.any(np.diff(t) <= 0):
+        raise FormatError(f"{path}: /nav/time is not strictly increasing")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(pos)) and np.all(np.isfinite(hd))):
+        raise FormatError(f"{path}: /nav contains NaN or Inf")
+    return t, pos, hd
+
+
+def ownship_states(nav_t: np.ndarray, nav_pos: np.ndarray, nav_hd: np.ndarray,
+                   t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Observer [x, y, ẋ, ẏ] (m, m/s) and heading (rad) at times t from a nav track: positions
+    interpolated linearly, velocity from central differences, heading on the circle."""
+    if nav_t.size == 1:
+        own = np.zeros((t.size, 4))
+        own[:, :2] = nav_pos[0]
+        return own, np.full(t.size, math.radians(nav_hd[0]))
+    vel = np.gradient(nav_pos, nav_t, axis=0)
+    own = np.empty((t.size, 4))
+    for i in range(2):
+        own[:, i] = np.interp(t, nav_t, nav_pos[:, i])
+        own[:, 2 + i] = np.interp(t, nav_t, vel[:, i])
+    hd = np.interp(t, nav_t, np.unwrap(np.deg2rad(nav_hd)))
+    return own, hd
+
+
+def assign_by_continuity(port: np.ndarray, stbd: np.ndarray) -> np.ndarray:
+    """Two bearing streams (K, 2) rad from port/starboard pairs, each stream a continuous
+    history: θ and its mirror 2h − θ (eq. (8)). At each time the pairing of the four
+    (member, stream) distances to the streams' linear predictions with the smallest distance
+    is kept
+    and the other member goes to the other stream: the true bearing moves slowly while its
+    mirror swings by twice the heading change, so the true stream anchors the assignment even
+    during an ownship turn."""
+    z = np.empty((port.size, 2))
+    z[0] = port[0], stbd[0]
+    for k in range(1, port.size):
+        # first-order prediction of each stream (zero-order at the second bearing)
+        p0 = z[k - 1, 0] + (kc.wrap(z[k - 1, 0] - z[k - 2, 0]) if k > 1 else 0.0)
+        p1 = z[k - 1, 1] + (kc.wrap(z[k - 1, 1] - z[k - 2, 1]) if k > 1 else 0.0)
+        d = [abs(kc.wrap(port[k] - p0)), abs(kc.wrap(stbd[k] - p1)),
+             abs(kc.wrap(stbd[k] - p0)), abs(kc.wrap(port[k] - p1))]
+        z[k] = (port[k], stbd[k]) if int(np.argmin(d)) < 2 else (stbd[k], port[k])
+    return z
+
+
+def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
+                   cfg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Run the configured filter (one hypothesis per column of zs_rad) over the bearings.
+
+    Returns the combined state (K, n) (eq. (12)), covariance (K, n, n) (eq. (13)), weights
+    (K, n_hyp) and the kernel status (bit 4: every hypothesis diverged)."""
+    model = make_model(cfg["model"], float(cfg["q1"]), float(cfg["q2"]))
+    try:
+        filt = make_filter(cfg["filter"], model, float(cfg["sigma_bearing_deg"]),
+                           **cfg["params"])
+    except ConfigError:
+        raise
+    except (TypeError, ValueError) as e:
+        raise ConfigError(f"tracker.params: {e}") from None
+    prior = TrackPrior(sigma_bearing_deg=float(cfg["sigma_bearing_deg"]),
+                       **{k: float(cfg[k]) for k in _PRIOR_KEYS if k in cfg})
+    K, n_hyp = zs_rad.shape
+    n = model.dim
+    xs = np.zeros((K, n))
+    Ps = np.zeros((K, n, n))
+    ws = np.zeros((K, n_hyp))
+    if hasattr(filt, "kernel_args"):
+        kind, U, wm, wc, Up, wmp, wcp = filt.kernel_args()
+        p = prior.as_array()
+        draw = np.array([p[0], p[2], 0.0])
+        status = kc.run_track(kind, model.code, n_hyp, np.ascontiguousarray(times),
+                              np.ascontiguousarray(zs_rad), np.ascontiguousarray(own),
+                              filt.sigma, model.q1, model.q2, p, draw, U, wm, wc, Up, wmp,
+                              wcp, xs, Ps, ws)
+        return xs, Ps, ws, int(status)
+    # any other filter object (e.g. a particle filter registered in FILTERS): per-step path
+    fs = []
+    for h in range(n_hyp):
+        f = filt if h == 0 else make_filter(cfg["filter"], model,
+                                            float(cfg["sigma_bearing_deg"]), **cfg["params"])
+        f.initialize(*init_from_bearing(math.degrees(zs_rad[0, h]), own[0], prior, n))
+        fs.append(f)
+    lr = LRResolver(fs)
+    status = 0
+    for k in range(K):
+        if k > 0:
+            try:
+                lr.step(times[k] - times[k - 1], own[k - 1], own[k],
+                        np.degrees(zs_rad[k]).tolist())
+            except FilterDivergence:
+                xs[k:], Ps[k:], ws[k:] = xs[k - 1], Ps[k - 1], ws[k - 1]
+                return xs, Ps, ws, 4
+        xs[k], Ps[k] = lr.estimate()
+        ws[k] = lr.weights
+    return xs, Ps, ws, status
+
+
+def run_tracker(products_path: str, config_path: str, out_path: str,
+                progress: bool = False) -> None:
+    """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5`` (see the module doc)."""
+    from ..io.products import ProductsWriter, read_products
+
+    cfg = load_tracker_config(config_path)
+    if not os.path.exists(products_path):
+        raise FormatError(f"{products_path}: no such file")
+    prod = read_products(products_path)
+    b = _read_bearings(prod, cfg.get("bearings"), products_path)
+    src = cfg.get("nav") or _s(prod["/"].get("source", ""))
+    if not src:
+        raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
+                          "set tracker.nav")
+    rec = _resolve(src, config_path if cfg.get("nav") else products_path)
+    nav_t, nav_pos, nav_hd = _read_nav(rec)
+    t = b["time"]
+    own, hd = ownship_states(nav_t, nav_pos, nav_hd, t)
+    port = np.deg2rad(b["bearing_port_deg"])
+    stbd = np.deg2rad(b["bearing_stbd_deg"])
+    if cfg["lr"]:
+        zs = assign_by_continuity(port, stbd)
+    else:
+        zs = (port if cfg["side"] == "port" else stbd)[:, None]
+    zs = (zs + np.pi) % (2 * np.pi) - np.pi
+    if progress:
+        print(f"tracking {t.size} bearings with {cfg['filter'].upper()}"
+              f"{' + L-R resolution' if cfg['lr'] else ''}", file=sys.stderr)
+    xs, Ps, ws, status = track_bearings(t, zs, own, cfg)
+    n_ok = t.size
+    if status & 4:
+        last = np.flatnonzero(np.any(ws > 0, axis=1))
+        n_ok = int(last.max()) + 1 if last.size else 1
+        warnings.warn(f"{out_path}: the track diverged after {n_ok} of {t.size} bearings; "
+                      "only the rows before are written", stacklevel=2)
+    cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
+    with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,
+                        attrs={"recording": str(rec)}) as w:
+        g = w.group("tracks", "tracks", stage="track", filter=cfg["filter"],
+                    model=cfg["model"], lr=bool(cfg["lr"]), status=int(status))
+        sl = slice(0, n_ok)
+        g.append(time=t[sl], track_id=np.zeros(n_ok, dtype=np.int64),
+                 x=xs[sl, 0] + own[sl, 0], y=xs[sl, 1] + own[sl, 1],
+                 vx=xs[sl, 2] + own[sl, 2], vy=xs[sl, 3] + own[sl, 3],
+                 cov=Ps[sl, :4, :4], own_x=own[sl, 0], own_y=own[sl, 1])
+
+
+__all__ = ["run_tracker", "load_tracker_config", "track_bearings", "ownship_states",
+           "assign_by_continuity", "ArrayprocError"]
