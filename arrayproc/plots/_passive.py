@@ -1,0 +1,50 @@
+"""Helpers shared by the BTR and LOFAR plots: product lookup, colour scale, truth access."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ArrayprocError, FormatError
+
+
+def find_group(path: str, kind: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The first products group of ``kind`` and the root attributes."""
+    from ..io.products import read_products
+    groups = read_products(path)
+    root = groups.pop("/")
+    for g in groups.values():
+        k = g["kind"]
+        if (k.decode() if isinstance(k, bytes) else str(k)) == kind:
+            if "time" not in g:
+                raise ArrayprocError(f"{path}: {kind} product is empty (no rows)")
+            return g, root
+    raise ArrayprocError(f"{path}: no {kind} product (kinds: "
+                         f"{', '.join(sorted({str(g['kind']) for g in groups.values()}))})")
+
+
+def robust_top(x: np.ndarray) -> float:
+    """Top of the colour scale: the 99.9th percentile of the finite values (dB)."""
+    v = np.asarray(x, float)
+    v = v[np.isfinite(v)]
+    return float(np.percentile(v, 99.9)) if v.size else 0.0
+
+
+def open_truth_recording(root: dict[str, Any]):
+    """The recording named by the products' ``source`` attribute, if it exists and has
+    ``/truth/sources``; otherwise None."""
+    src = root.get("source", "")
+    src = src.decode() if isinstance(src, bytes) else str(src)
+    if not src or not Path(src).is_file():
+        return None
+    from ..io.recording import Recording
+    try:
+        rec = Recording(src)
+    except FormatError:
+        return None
+    if not rec.has("truth/sources"):
+        rec.close()
+        return None
+    return rec

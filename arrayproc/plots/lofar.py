@@ -1,0 +1,78 @@
+"""LOFAR plot: frequency across, time running down, for one beam, fixed dB dynamic range."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import register_plot
+from ._passive import find_group, open_truth_recording, robust_top
+
+#: Truth tonals are drawn while their source lies within this many degrees of the beam.
+TRUTH_GATE_DEG = 10.0
+#: Bottom of the colour scale for TPSW-normalised LOFAR-grams (noise sits at 0 dB).
+TPSW_FLOOR_DB = -3.0
+
+
+@register_plot("lofar")
+def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | None = None,
+               truth: bool = True) -> None:
+    """Draw the LOFAR-gram of the beam nearest cone angle ``beam`` (deg) from the first
+    ``lofar`` group of ``path`` into ``out_png``.
+
+    Default beam: the one with the highest mean level. The colour scale spans ``range_db`` dB:
+    from TPSW_FLOOR_DB up for TPSW-normalised products (background = 0 dB), otherwise down
+    from the 99.9th percentile of that beam's record. With truth (see the BTR plot), each
+    source's Doppler-shifted tonals are drawn as dashed lines while the source is within
+    ±TRUTH_GATE_DEG of the beam.
+    """
+    import matplotlib.pyplot as plt
+
+    g, root = find_group(path, "lofar")
+    t, f, cone, p = g["time"], g["freq"], g["cone_deg"], g["power_db"]
+    if beam is None:
+        b = int(np.argmax(np.nanmean(p, axis=(0, 2)))) if p.size else 0
+    else:
+        b = int(np.argmin(np.abs(cone - float(beam))))
+    pb = p[:, b, :]
+    norm = str(g["attrs"].get("normalise", "none"))
+    if norm == "tpsw":  # background at 0 dB: the scale starts just below it
+        top = TPSW_FLOOR_DB + range_db
+    else:
+        top = robust_top(pb)
+    fig, ax = plt.subplots(figsize=(9.0, 7.5), dpi=110)
+    dt = np.median(np.diff(t)) if t.size > 1 else 1.0
+    df = np.median(np.diff(f)) if f.size > 1 else 1.0
+    im = ax.imshow(pb, aspect="auto", cmap="viridis",
+                   vmin=top - range_db, vmax=top,
+                   extent=[f[0] - df / 2, f[-1] + df / 2, t[-1] + dt / 2, t[0] - dt / 2],
+                   interpolation="nearest")
+    cb = fig.colorbar(im, ax=ax, pad=0.02)
+    cb.set_label(("level over TPSW background, dB" if norm == "tpsw"
+                  else "power, dB re 1 µPa²") + f" ({range_db:g} dB range)")
+    rec = open_truth_recording(root) if truth else None
+    if rec is not None:
+        from ..passive_truth import cone_angles, tonal_frequencies
+        with rec:
+            cones = cone_angles(rec, t)
+            first = True
+            for i, (name, fr) in enumerate(tonal_frequencies(rec, t).items()):
+                near = np.abs(cones[name] - cone[b]) <= TRUTH_GATE_DEG
+                for k in range(fr.shape[1]):
+                    ff = np.where(near, fr[:, k], np.nan)
+                    if np.all(np.isnan(ff)):
+                        continue
+                    ax.plot(ff, t, ls=":", lw=1.0, alpha=0.6, color=f"C{(i + 1) % 10}",
+                            label=f"truth: {name}" if k == 0 else None)
+                    first = False
+            if not first:
+                ax.legend(loc="lower right", fontsize=8, framealpha=0.7)
+    ax.set_xlim(f[0] - df / 2, f[-1] + df / 2)
+    ax.set_ylim(t[-1] + dt / 2, t[0] - dt / 2)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("time (s since recording start)")
+    ax.set_title(f"LOFAR, beam {cone[b]:.1f} deg cone angle\n{Path(path).name}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out_png)
+    plt.close(fig)
