@@ -37,7 +37,8 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
         from ..passive_truth import cone_angles
         with rec:
             for i, (name, c) in enumerate(cone_angles(rec, t).items()):
-                ax.plot(c, t, ls=":", lw=1.2, alpha=0.8, color=f"C{(i + 1) % 10}", label=f"truth: {name}")
+                ax.plot(c, t, ls=":", lw=1.2, alpha=0.8, color=f"C{(i + 1) % 10}",
+                        label=f"truth: {name}")
         ax.legend(loc="lower right", fontsize=8, framealpha=0.7)
     ax.set_xlim(min(cone[0], cone[-1]), max(cone[0], cone[-1]))
     ax.set_ylim(t[-1] if t.size else 1, t[0] if t.size else 0)
