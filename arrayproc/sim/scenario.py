@@ -33,14 +33,14 @@ class _Table:
 
     def __init__(self, data: Any, where: str, file: str) -> None:
         if not isinstance(data, dict):
-            raise ConfigError(f"{file}: {where} must be a table")
+            raise ConfigError(f"{file}: [{where}] must be a table")
         self.d = data
         self.where = where
         self.file = file
         self.used: set[str] = set()
 
     def err(self, key: str, msg: str) -> ConfigError:
-        return ConfigError(f"{self.file}: {self.where}.{key}: {msg}")
+        return ConfigError(f"{self.file}: [{self.where}] {key}: {msg}")
 
     def has(self, key: str) -> bool:
         return key in self.d
@@ -145,9 +145,9 @@ class _Table:
         self.used.add(key)
         if key not in self.d:
             if required:
-                raise ConfigError(f"{self.file}: [{self.where}.{key}] is missing")
+                raise ConfigError(f"{self.file}: [{self._child(key)}] is missing")
             return None
-        return _Table(self.d[key], f"{self.where}.{key}", self.file)
+        return _Table(self.d[key], self._child(key), self.file)
 
     def subs(self, key: str) -> list[_Table]:
         """An array of tables (``[[where.key]]``), possibly empty."""
@@ -157,12 +157,16 @@ class _Table:
             v = [v]
         if not isinstance(v, list):
             raise self.err(key, "must be an array of tables")
-        return [_Table(x, f"{self.where}.{key}[{i}]", self.file) for i, x in enumerate(v)]
+        return [_Table(x, f"{self._child(key)}[{i}]", self.file) for i, x in enumerate(v)]
+
+    def _child(self, key: str) -> str:
+        return f"{self.where}.{key}" if self.where else key
 
     def done(self) -> None:
         unknown = sorted(set(self.d) - self.used)
         if unknown:
-            raise ConfigError(f"{self.file}: {self.where}: unknown key {unknown[0]!r}")
+            where = f"[{self.where}]" if self.where else "top level"
+            raise ConfigError(f"{self.file}: {where}: unknown key {unknown[0]!r}")
 
 
 def _speed(t: _Table, required: bool = True) -> float | None:
@@ -195,7 +199,7 @@ def _trajectory(t: _Table, need_motion: bool = True) -> tuple[Trajectory, bool]:
         try:
             return Trajectory.from_legs(start, legs), False
         except ConfigError as e:
-            raise ConfigError(f"{t.file}: {t.where}: {e}") from None
+            raise ConfigError(f"{t.file}: [{t.where}]: {e}") from None
     if t.has("course") or t.has("speed") or t.has("speed_kn"):
         course = t.num("course", required=True)
         speed = _speed(t)
@@ -372,7 +376,7 @@ def load_scenario(path: str | Path) -> Scenario:
 def parse_scenario(data: dict, file: str = "<scenario>",
                    base_dir: Path | None = None) -> Scenario:
     """Validate a scenario given as a dict (as loaded from TOML)."""
-    root = _Table(data, "scenario", file)
+    root = _Table(data, "", file)
     rec = root.sub("recording", required=True)
     fs = rec.num("fs", required=True, positive=True)
     duration = rec.num("duration", required=True, positive=True)
@@ -423,7 +427,7 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         bb = _broadband(st.sub("broadband"), fs)
         st.done()
         if not tonals and bb is None:
-            raise ConfigError(f"{file}: {st.where}: a source needs tonals or [broadband]")
+            raise ConfigError(f"{file}: [{st.where}]: a source needs tonals or [broadband]")
         sources.append(SourceSpec(name, traj, depth, tonals, bb))
 
     # propagation
@@ -469,7 +473,7 @@ def parse_scenario(data: dict, file: str = "<scenario>",
             bb = _broadband(tt.sub("broadband"), fs)
             tt.done()
             if not tonals and bb is None:
-                raise ConfigError(f"{file}: {tt.where}: the tow ship needs tonals or "
+                raise ConfigError(f"{file}: [{tt.where}]: the tow ship needs tonals or "
                                   "[broadband]")
             sources.append(SourceSpec("towship", own, depth, tonals, bb, lead=dist,
                                       kind="towship"))
@@ -497,7 +501,7 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
         else:
             w = wf.cw(t.num("fc", required=True, positive=True), dur, taper)
     except ValueError as e:
-        raise ConfigError(f"{file}: {t.where}: {e}") from None
+        raise ConfigError(f"{file}: [{t.where}]: {e}") from None
     if w.band[1] > PASSBAND * fs:
         raise t.err("waveform", f"band up to {w.band[1]:g} Hz is above the simulator's band "
                     f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
