@@ -370,36 +370,35 @@ def shifted_rayleigh_moments(u: float):
     """Mean ρ(u) and second moment of the shifted Rayleigh density p(t) ∝ t exp(−(t−u)²/2),
     t ≥ 0 (Clark, Vinter & Yaqoob 2007): ρ = ((1+u²)Φ + uφ)/(φ + uΦ), E[t²] = 2 + uρ.
 
-    Uses the Mills ratio m = Φ(u)/φ(u) (asymptotic series for u < −30)."""
-    if u > -30.0:
+    For u < −3 both closed forms cancel catastrophically; there, with a = −u and the Mills
+    ratio's continued fraction Φ(u)/φ(u) = 1/(a + 1/(a + 2/(a + 3/(a + …)))), they reduce to
+    ρ = 2/(a + f) and E[t²] = 2f/(a + f) with f = 3/(a + 4/(a + 5/(a + …))), evaluated
+    backwards without cancellation."""
+    if u >= -3.0:
         phi = math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
         Phi = 0.5 * math.erfc(-u / math.sqrt(2.0))
-        if u > 0.0:
-            rho = ((1.0 + u * u) * Phi + u * phi) / (phi + u * Phi)
-        else:
-            m = Phi / phi
-            rho = ((1.0 + u * u) * m + u) / (1.0 + u * m)
-    else:
-        v = 1.0 / (u * u)
-        # 1 + u m = v(1 − 3v + 15v² − 105v³), (1+u²)m + u = |u|⁻¹ · 2v(1 − 6v + 45v² ...)
-        m = -1.0 / u * (1.0 - v + 3.0 * v * v - 15.0 * v * v * v + 105.0 * v ** 4)
-        rho = ((1.0 + u * u) * m + u) / (1.0 + u * m)
-    return rho, 2.0 + u * rho
+        rho = ((1.0 + u * u) * Phi + u * phi) / (phi + u * Phi)
+        return rho, 2.0 + u * rho
+    a = -u
+    f = 0.0
+    for k in range(200, 2, -1):
+        f = k / (a + f)
+    return 2.0 / (a + f), 2.0 * f / (a + f)
 
 
 @njit(cache=True)
 def _log_phi_plus_u_Phi(u: float) -> float:
-    """log(φ(u) + u Φ(u)), stable for large negative u (via the Mills ratio)."""
-    if u > 0.0:
+    """log(φ(u) + u Φ(u)); for u < −3 as log φ(u) + log(c/(a + c)), a = −u,
+    c = 1/(a + 2/(a + 3/(a + …))) (Mills-ratio continued fraction, no cancellation)."""
+    if u >= -3.0:
         return math.log(math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
                         + u * 0.5 * math.erfc(-u / math.sqrt(2.0)))
-    if u > -30.0:
-        phi = math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
-        m = 0.5 * math.erfc(-u / math.sqrt(2.0)) / phi
-    else:
-        v = 1.0 / (u * u)
-        m = -1.0 / u * (1.0 - v + 3.0 * v * v - 15.0 * v * v * v + 105.0 * v ** 4)
-    return -0.5 * u * u - 0.5 * _LOG_2PI + math.log(1.0 + u * m)
+    a = -u
+    f = 0.0
+    for k in range(200, 1, -1):
+        f = k / (a + f)
+    c = 1.0 / (a + f)
+    return -0.5 * u * u - 0.5 * _LOG_2PI + math.log(c / (a + c))
 
 
 @njit(cache=True)
