@@ -5,6 +5,8 @@ the models.
 Tables written:
   munk_bellhopcxx_incoherent.h5   bellhopcxx, 'IG' (the paper's model and mode), receiver depths
                                   0-1000 m every 10 m, ranges 0-50 km every 20 m
+  munk_bellhopcxx_incoherent_dbperm.h5   the same with the appendix's printed 'CVM' option
+                                  (bottom attenuation 0.8 dB/m instead of 0.8 dB/λ)
   munk_bellhop_fortran_incoherent_300m.h5  Fortran BELLHOP (same wheel), 'IG', 300 m only
   munk_bellhopcxx_semicoherent_300m.h5     bellhopcxx, 'SG' (Lloyd-mirror source pattern)
   munk_ram_band_300m.h5           RAM PE (pyram), converged grid, intensity averaged 45-55 Hz
@@ -73,6 +75,11 @@ def main() -> None:
     semi = run_bellhop(BellhopEnv(run_type="SG"), "bellhopcxx")
     at_depth(semi, RCV).save(out / "munk_bellhopcxx_semicoherent_300m.h5")
     cvm = run_bellhop(BellhopEnv(ssp_option="CVM"), "bellhopcxx")   # the appendix as printed
+    TLTable(r20, cvm.rcv_depth_m, cvm.src_depth_m,
+            cvm(r20[None, None, :], SRC, cvm.rcv_depth_m[None, :, None]),
+            dict(cvm.attrs, description="SPL paper appendix env as printed ('CVM': bottom "
+                 "attenuation 0.8 dB/m), bellhopcxx IG")).save(
+        out / "munk_bellhopcxx_incoherent_dbperm.h5")
 
     rr = np.arange(1000.0, 30001.0, 1000.0)
     raw = np.arange(1000.0, 30001.0, 10.0)

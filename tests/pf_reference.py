@@ -97,8 +97,9 @@ def loglik(x, obs, theta, sig_theta, level, sig_level, use_theta, use_level, sl_
         grid = r0 + dr * np.arange(tl.size)
         v = np.maximum(np.hypot(x[:, 2], x[:, 3]), 1e-6)
         sl = sl_par[0] + sl_par[1] * np.log10(v / sl_par[2])
-        out -= (level - (sl - np.interp(np.hypot(d[:, 0], d[:, 1]), grid, tl))) ** 2 \
-            / (2 * sig_level**2)
+        r = np.hypot(d[:, 0], d[:, 1])
+        tlr = np.interp(r, grid, tl) + 10 * np.log10(np.maximum(r, grid[-1]) / grid[-1])
+        out -= (level - (sl - tlr)) ** 2 / (2 * sig_level**2)
     return out
 
 

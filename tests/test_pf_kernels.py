@@ -163,7 +163,7 @@ def test_full_rpf_run_matches_numpy_reference(use_level, method):
     cov = np.empty((times.size, 4, 4))
     flags = np.zeros(times.size, np.bool_)
     k.rpf_run(theta, level, False, use_level, times, obs, np.uint64(SEED), n, 1 / 3, 1.5e-3,
-              0.02, 10.0, prior, SL, *TL, method, est, cov, flags)
+              0.02, 10.0, prior, SL, *TL, method, 1.0, est, cov, flags)
     er, cr, fr = ref.rpf(theta, level, use_level, times, obs, SEED, n, 1 / 3, 1.5e-3, 0.02,
                          10.0, prior, SL, TL, "systematic" if method == 0 else "multinomial")
     assert fr.sum() >= 3                       # the run exercises regularization-resampling
@@ -185,7 +185,7 @@ def test_monte_carlo_is_reproducible_and_thread_independent():
         cov = np.empty((4, times.size, 4, 4))
         fl = np.zeros((4, times.size), np.bool_)
         k.rpf_monte_carlo(th, lv, False, True, times, obs, seeds, 200, 1 / 3, 1.5e-3, 0.02,
-                          10.0, prior, SL, *TL, 0, est, cov, fl)
+                          10.0, prior, SL, *TL, 0, 1.0, est, cov, fl)
         return est
 
     a = go()
@@ -198,7 +198,7 @@ def test_monte_carlo_is_reproducible_and_thread_independent():
     assert a.tobytes() == b.tobytes()
     one = np.empty((times.size, 4))
     k.rpf_run(th[2], lv[2], False, True, times, obs, seeds[2], 200, 1 / 3, 1.5e-3, 0.02, 10.0,
-              prior, SL, *TL, 0, one, np.empty((times.size, 4, 4)),
+              prior, SL, *TL, 0, 1.0, one, np.empty((times.size, 4, 4)),
               np.zeros(times.size, np.bool_))
     assert one.tobytes() == a[2].tobytes()
     assert not np.array_equal(a[0], a[1])        # different seeds, different runs

@@ -157,13 +157,15 @@ def _wrap(a):
 
 @njit(cache=True, inline="always")
 def _tl_interp(r, r0, dr, tl):
-    """Linear interpolation of a uniform-grid TL profile, clamped at the ends."""
+    """Linear interpolation of a uniform-grid TL profile; held below the first range and
+    continued by cylindrical spreading, TL(r_max) + 10 log10(r / r_max), beyond the last."""
     u = (r - r0) / dr
     if u <= 0.0:
         return tl[0]
     m = tl.shape[0] - 1
     if u >= m:
-        return tl[m]
+        rmax = r0 + m * dr
+        return tl[m] + 10.0 * math.log10(r / rmax)
     j = int(u)
     f = u - j
     return tl[j] * (1.0 - f) + tl[j + 1] * f
@@ -363,7 +365,7 @@ def bandwidth(n):
 @njit(cache=True)
 def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, n_thr,
             sigma_a, sig_theta, sig_level, prior, sl_par, tl_r0, tl_dr, tl, resample_method,
-            est, cov, resampled):
+            h_scale, est, cov, resampled):
     """One RPF run over all measurement times (SPL paper section 4).
 
     ``prior`` = [range_mean, range_std, speed_mean, speed_std, course_offset, course_std,
@@ -372,7 +374,7 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
     used (and by θ₀ if ``use_theta0``); from k = 1: prediction, update, regularization-
     resampling when N_eff < N_thr·N (D from the weighted covariance before resampling), and
     the estimate after that step (SPL paper section 4.4). ``sl_par`` = [sl0, slope, v_ref].
-    Outputs: ``est`` (K, 4), ``cov`` (K, 4, 4), ``resampled`` (K,) flags.
+    ``h_scale`` multiplies the MISE-optimal bandwidth (1 in the paper). Outputs: ``est`` (K, 4), ``cov`` (K, 4, 4), ``resampled`` (K,) flags.
     """
     k_n = times.shape[0]
     n = n_particles
@@ -388,7 +390,7 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
     mean = np.empty(NX)
     pcov = np.empty((NX, NX))
     dmat = np.empty((NX, NX))
-    h = bandwidth(n)
+    h = h_scale * bandwidth(n)
     init_polar_prior(parts, state, obs[0, 0], obs[0, 1], theta[0], sig_theta, prior[0],
                      prior[1], prior[2], prior[3], theta[0] + prior[4], prior[5], prior[6])
     for k in range(k_n):
@@ -425,7 +427,7 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
 @njit(cache=True, parallel=True)
 def rpf_monte_carlo(theta, level, use_theta0, use_level, times, obs, seeds, n_particles, n_thr,
                     sigma_a, sig_theta, sig_level, prior, sl_par, tl_r0, tl_dr, tl,
-                    resample_method, est, cov, resampled):
+                    resample_method, h_scale, est, cov, resampled):
     """``rpf_run`` for every run r (rows of ``theta``, ``level``, ``seeds``), parallel over runs.
 
     Each run has its own seed, so the result does not depend on the thread count.
@@ -433,4 +435,4 @@ def rpf_monte_carlo(theta, level, use_theta0, use_level, times, obs, seeds, n_pa
     for r in prange(theta.shape[0]):
         rpf_run(theta[r], level[r], use_theta0, use_level, times, obs, seeds[r], n_particles,
                 n_thr, sigma_a, sig_theta, sig_level, prior, sl_par, tl_r0, tl_dr, tl,
-                resample_method, est[r], cov[r], resampled[r])
+                resample_method, h_scale, est[r], cov[r], resampled[r])

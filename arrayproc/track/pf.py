@@ -34,6 +34,7 @@ class RPFConfig:
     sigma_level_db: float = 10.0             # filter's σ_l (data: 4 dB in the paper)
     use_levels: bool = True                  # False: bearings-only tracking
     resampling: str = "systematic"           # or "multinomial" (the paper's)
+    bandwidth_scale: float = 1.0             # × MISE-optimal h (eq. (27)); 1 in the paper
     range_mean_m: float = 10e3               # prior (Ristic et al. 2003 ch. 6.4.1.1)
     range_std_m: float = 2e3
     speed_mean: float = 3 * KNOT
@@ -55,7 +56,7 @@ class RPFConfig:
             raise ConfigError("rpf: resampling must be 'systematic' or 'multinomial'")
         if self.use_levels and self.tl_table is None:
             raise ConfigError("rpf: use_levels needs a tl_table")
-        for name in ("sigma_bearing_deg", "sigma_level_db", "range_std_m"):
+        for name in ("sigma_bearing_deg", "sigma_level_db", "range_std_m", "bandwidth_scale"):
             if getattr(self, name) <= 0:
                 raise ConfigError(f"rpf: {name} must be > 0")
 
@@ -126,7 +127,8 @@ class RegularizedParticleFilter:
                             float(c.n_thr), float(c.sigma_a),
                             float(np.deg2rad(c.sigma_bearing_deg)), float(c.sigma_level_db),
                             self._prior(), c.source_level.as_array(), r0, dr, tl,
-                            0 if c.resampling == "systematic" else 1, est, cov, rs)
+                            0 if c.resampling == "systematic" else 1,
+                            float(c.bandwidth_scale), est, cov, rs)
         return RPFResult(est, cov, rs)
 
     def run(self, times: np.ndarray, observer_pos: np.ndarray, bearings_deg: np.ndarray,

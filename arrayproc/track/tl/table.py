@@ -3,8 +3,10 @@
 SPL paper section 3.2: the propagation model gives TL on a finite grid of ranges and depths
 and values in between are linearly interpolated (eq. (13)). A :class:`TLTable` holds TL (dB)
 on a regular grid of ranges and receiver depths for one or more source depths; a query is
-bilinear in (receiver depth, range) and linear between source depths. Outside the grid the
-edge values are held (clamped).
+bilinear in (receiver depth, range) and linear between source depths. Outside the depth grids
+and below the first range the edge values are held; beyond the last range TL continues by
+cylindrical spreading, TL(r_max) + 10 log10(r / r_max), so that a tracker's hypotheses far
+outside the table are not given a constant, too-small loss.
 
 Tables are stored as HDF5 (``data/tl/*.h5``): datasets ``range_m`` (n_r,), ``rcv_depth_m``
 (n_z,), ``src_depth_m`` (n_s,), ``tl_db`` (n_s, n_z, n_r), root attrs ``model``, ``freq_hz``,
@@ -64,14 +66,16 @@ class TLTable:
                 raise FormatError(f"TL table: {name} must be strictly increasing")
 
     def __call__(self, range_m, src_depth_m, rcv_depth_m) -> np.ndarray:
-        """TL (dB) at the given range(s), source depth(s) and receiver depth(s) (broadcast)."""
+        """TL (dB) at the given range(s), source depth(s) and receiver depth(s) (broadcast);
+        bilinear in (receiver depth, range), linear in source depth (SPL paper section 3.2)."""
         r, zs, zr = np.broadcast_arrays(np.asarray(range_m, float), np.asarray(src_depth_m, float),
                                         np.asarray(rcv_depth_m, float))
         i_s, f_s = _axis_index(self.src_depth_m, zs)
         i_z, f_z = _axis_index(self.rcv_depth_m, zr)
         i_r, f_r = _axis_index(self.range_m, r)
         ns, nz, nr = self.tl_db.shape
-        out = np.zeros(r.shape)
+        rmax = self.range_m[-1]
+        out = np.where(r > rmax, 10.0 * np.log10(np.maximum(r, rmax) / rmax), 0.0)
         for ds, ws in ((0, 1.0 - f_s), (1, f_s)):
             js = np.minimum(i_s + ds, ns - 1)
             for dz, wz in ((0, 1.0 - f_z), (1, f_z)):

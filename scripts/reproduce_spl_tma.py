@@ -1,0 +1,152 @@
+#!/usr/bin/env python
+"""Reproduce the RMSE curves of Iglésis & de Montella (2024), section 5 (figs. 3, 5, 7, table 1).
+
+For each Monte Carlo run the same simulated bearings and levels are given to the RPF twice:
+bearings-only (BOT) and bearings + SPL. Prints the paper's numbers next to ours.
+
+Usage:
+  python scripts/reproduce_spl_tma.py --scenario manoeuvring|parallel|static --runs N
+         [--particles 5000] [--seed 1] [--resampling systematic|multinomial]
+         [--json OUT] [--plot DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from arrayproc.plots.rmse import plot_rmse_curves, plot_scenario_geometry
+from arrayproc.track.crlb import position_rmse_bound
+from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig, run_seeds
+from arrayproc.track.scenarios import get_scenario
+from arrayproc.track.tl import load_default_table
+
+#: Published values: (time_min, BOT m, BOT+SPL m); None where the paper gives no number.
+PAPER = {
+    "manoeuvring": {"min near 24 min": (24.0, 155.0, 85.0), "final (30 min)": (30.0, 228.58,
+                                                                                146.17)},
+    "static": {"36 min": (36.0, 2857.0, 344.0), "63 min": (63.0, 4338.0, 203.0),
+               "final (150 min)": (150.0, 13657.0, 1532.0)},
+    "parallel": {},
+}
+
+
+def rmse(err: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.mean(err**2, axis=0))
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenario", required=True, choices=["manoeuvring", "parallel", "static"])
+    ap.add_argument("--runs", type=int, default=100)
+    ap.add_argument("--particles", type=int, default=5000)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--resampling", default="systematic", choices=["systematic", "multinomial"])
+    ap.add_argument("--tl", default="munk_bellhopcxx_incoherent",
+                    help="bundled TL table in data/tl (without .h5)")
+    ap.add_argument("--json", default=None)
+    ap.add_argument("--plot", default=None, help="directory for the PNG figures")
+    args = ap.parse_args(argv)
+
+    sc = get_scenario(args.scenario)
+    tab = load_default_table(args.tl)
+    data = sc.simulate(args.runs, args.seed, tab)
+    out: dict = {"scenario": sc.name, "runs": args.runs, "particles": args.particles,
+                 "seed": args.seed, "resampling": args.resampling,
+                 "threads": numba.get_num_threads(),
+                 "tl_table": str(tab.attrs.get("description", ""))}
+    rm = {}
+    for label, use in (("bot", False), ("spl", True)):
+        cfg = RPFConfig(n_particles=args.particles, use_levels=use, tl_table=tab,
+                        resampling=args.resampling,
+                        sigma_bearing_deg=sc.sigma_bearing_deg,
+                        sigma_level_db=sc.sigma_level_filter_db)
+        f = RegularizedParticleFilter(cfg)
+        f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3],
+                   data.levels_db[:1, :3] if use else None)          # compile outside timing
+        t0 = time.perf_counter()
+        res = f.run_many(data.times, data.observer_pos, data.bearings_deg,
+                         data.levels_db if use else None,
+                         seeds=run_seeds(args.seed, args.runs, tag=1 + int(use)))
+        out[f"wall_s_{label}"] = time.perf_counter() - t0
+        err = sc.position_error(res.est)
+        rm[label] = rmse(err)
+        out[f"resampling_fraction_{label}"] = float(res.resampled.mean())
+        out[f"median_final_error_{label}_m"] = float(np.median(err[:, -1]))
+    crlb = position_rmse_bound(sc.crlb())
+    tmin = data.times / 60.0
+    out.update({"time_min": tmin.tolist(), "rmse_bot_m": rm["bot"].tolist(),
+                "rmse_spl_m": rm["spl"].tolist(),
+                "crlb_bot_m": [None if not np.isfinite(c) else float(c) for c in crlb]})
+
+    # comparison table with the paper
+    rows = []
+    for what, (t, pb, ps) in PAPER[sc.name].items():
+        i = int(np.argmin(np.abs(tmin - t)))
+        rows.append({"what": what, "time_min": t, "paper_bot_m": pb, "ours_bot_m": rm["bot"][i],
+                     "paper_spl_m": ps, "ours_spl_m": rm["spl"][i]})
+    if sc.name == "manoeuvring":
+        after = tmin >= 17.0
+        for label in ("bot", "spl"):
+            j = int(np.argmin(np.where(after, rm[label], np.inf)))
+            out[f"min_rmse_{label}_m"] = float(rm[label][j])
+            out[f"min_rmse_{label}_time_min"] = float(tmin[j])
+    if sc.name == "static":
+        for label in ("bot", "spl"):
+            j = int(np.argmin(rm[label]))
+            out[f"min_rmse_{label}_m"] = float(rm[label][j])
+            out[f"min_rmse_{label}_time_min"] = float(tmin[j])
+        rows.append({"what": "CRLB at 150 min (paper: 313.88 % above RMSE+SPL)",
+                     "time_min": 150.0, "paper_bot_m": 1532.0 * 4.1388,
+                     "ours_bot_m": float(crlb[-1]), "paper_spl_m": None, "ours_spl_m": None})
+    if sc.name == "parallel":
+        below = np.where(rm["spl"] < crlb)[0]
+        out["spl_below_crlb_from_min"] = float(tmin[below[0]]) if below.size else None
+        out["final_ratio_bot_over_spl"] = float(rm["bot"][-1] / rm["spl"][-1])
+        rows.append({"what": "final BOT/SPL ratio (paper 5.77)", "time_min": 150.0,
+                     "paper_bot_m": 5.7743, "ours_bot_m": out["final_ratio_bot_over_spl"],
+                     "paper_spl_m": None, "ours_spl_m": None})
+    out["paper_comparison"] = rows
+
+    print(f"{sc.name}: {args.runs} runs, N = {args.particles}, {numba.get_num_threads()} threads; "
+          f"wall BOT {out['wall_s_bot']:.1f} s, SPL {out['wall_s_spl']:.1f} s")
+    print(f"{'':44s} {'paper BOT':>10s} {'ours BOT':>10s} {'paper SPL':>10s} {'ours SPL':>10s}")
+    for r in rows:
+        def f(v):
+            return f"{v:10.1f}" if isinstance(v, float | int) else f"{'':>10s}"
+        print(f"{r['what']:44s} {f(r['paper_bot_m'])} {f(r['ours_bot_m'])} "
+              f"{f(r['paper_spl_m'])} {f(r['ours_spl_m'])}")
+    for key in ("min_rmse_bot_m", "min_rmse_bot_time_min", "min_rmse_spl_m",
+                "min_rmse_spl_time_min", "spl_below_crlb_from_min"):
+        if key in out:
+            print(f"  {key} = {out[key]}")
+
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(out, indent=1))
+    if args.plot:
+        d = Path(args.plot)
+        d.mkdir(parents=True, exist_ok=True)
+        pts = {}
+        if PAPER[sc.name]:
+            ts = [v[0] for v in PAPER[sc.name].values()]
+            pts = {"paper BOT": (ts, [v[1] for v in PAPER[sc.name].values()]),
+                   "paper bearings + SPL": (ts, [v[2] for v in PAPER[sc.name].values()])}
+        plot_rmse_curves(tmin, {"BOT (RPF)": rm["bot"], "bearings + SPL (RPF)": rm["spl"]},
+                         str(d / f"spl_tma_rmse_{sc.name}.png"), crlb=crlb,
+                         title=f"{sc.name} observer, {args.runs} runs, N = {args.particles}",
+                         paper_points=pts)
+        plot_scenario_geometry(data.truth, data.observer_pos,
+                               str(d / f"spl_tma_geometry_{sc.name}.png"),
+                               title=f"{sc.name} scenario")
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(0 if main() else 1)
