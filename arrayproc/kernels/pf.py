@@ -374,7 +374,8 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
     used (and by θ₀ if ``use_theta0``); from k = 1: prediction, update, regularization-
     resampling when N_eff < N_thr·N (D from the weighted covariance before resampling), and
     the estimate after that step (SPL paper section 4.4). ``sl_par`` = [sl0, slope, v_ref].
-    ``h_scale`` multiplies the MISE-optimal bandwidth (1 in the paper). Outputs: ``est`` (K, 4), ``cov`` (K, 4, 4), ``resampled`` (K,) flags.
+    ``h_scale`` multiplies the MISE-optimal bandwidth (1 in the paper).
+    Outputs: ``est`` (K, 4), ``cov`` (K, 4, 4), ``resampled`` (K,) flags.
     """
     k_n = times.shape[0]
     n = n_particles
