@@ -125,23 +125,25 @@ def pair_directions(dirs: np.ndarray, tol: float = 1e-9) -> tuple[np.ndarray, np
     """Group beams into unique directions up to sign.
 
     Returns ``(unique (U, 3), uidx (B,), sign (B,))`` with ``dirs[b] = sign[b] ·
-    unique[uidx[b]]``.
+    unique[uidx[b]]`` (to within ``tol``).
     """
+    d = np.asarray(dirs, float)
+    q = np.round(d / tol).astype(np.int64)
+    # canonical sign: the first non-zero component positive
+    first = np.argmax(q != 0, axis=1)
+    s = np.sign(q[np.arange(len(q)), first])
+    s[s == 0] = 1
+    keys = q * s[:, None]
+    index: dict[tuple, int] = {}
     uniq: list[np.ndarray] = []
-    uidx = np.empty(len(dirs), np.int64)
-    sign = np.empty(len(dirs), np.float32)
-    for b, d in enumerate(dirs):
-        for i, u in enumerate(uniq):
-            if np.max(np.abs(d - u)) < tol:
-                uidx[b], sign[b] = i, 1.0
-                break
-            if np.max(np.abs(d + u)) < tol:
-                uidx[b], sign[b] = i, -1.0
-                break
-        else:
-            uidx[b], sign[b] = len(uniq), 1.0
-            uniq.append(d)
-    return np.array(uniq).reshape(-1, 3), uidx, sign
+    uidx = np.empty(len(d), np.int64)
+    for i, k in enumerate(map(tuple, keys)):
+        j = index.get(k)
+        if j is None:
+            j = index[k] = len(uniq)
+            uniq.append(d[i] * s[i])
+        uidx[i] = j
+    return np.array(uniq).reshape(-1, 3), uidx, s.astype(np.float32)
 
 
 def element_delays(positions: np.ndarray, unique_dirs: np.ndarray, mode: str,

@@ -1,0 +1,306 @@
+"""CBF (thesis eq. 2.8) against the thesis closed forms and an independent numpy reference."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from arrayproc.block import Block
+from arrayproc.chain import build_chain
+from arrayproc.errors import ConfigError
+from arrayproc.io.geometry import line_array
+from arrayproc.kernels import beamform as kb
+from arrayproc.stages.cbf import CBF, beam_power_reference, time_window
+
+C = 1500.0
+
+
+def plane_wave(n: int, fs: float, positions: np.ndarray, cone_deg: float, freq: float,
+               amp: float = 1.0, phase: float = 0.3) -> np.ndarray:
+    """Exact tonal plane wave from cone angle θ0: x_n(t) = A cos(2π f (t + x_n cos θ0 / c) + φ).
+
+    The element nearer the source (larger x·cos θ0) receives the wavefront earlier (thesis
+    eq. 2.10 without motion).
+    """
+    t = np.arange(n) / fs
+    tau = positions[:, 0] * np.cos(np.deg2rad(cone_deg)) / C
+    return amp * np.cos(2 * np.pi * freq * (t[:, None] + tau[None, :]) + phase)
+
+
+def blocks_of(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,)):
+    i, k = 0, 0
+    while i < x.shape[0]:
+        s = min(sizes[k % len(sizes)], x.shape[0] - i)
+        yield Block(x[i:i + s].astype(np.float32), ("time", "channel"), i / fs, s / fs, fs,
+                    positions, None, meta={"n_valid": s, "sample0": i})
+        i += s
+        k += 1
+
+
+def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,), **kw):
+    stage = CBF(**kw)
+    out = list(stage.process(blocks_of(x, fs, positions, sizes)))
+    return stage, np.concatenate([o.data for o in out]), out
+
+
+def i_nh(theta_deg: np.ndarray, theta0_deg: float, f: float, n: int, dx: float) -> np.ndarray:
+    """Thesis eq. (2.13): I_NH(θ, θ0, f) = (1 − e^{jψN}) / (1 − e^{jψ}), ψ = 2π f δx/c (cos θ −
+    cos θ0); its limit N_H where ψ → 0."""
+    psi = 2 * np.pi * f * dx / C * (np.cos(np.deg2rad(theta_deg)) - np.cos(np.deg2rad(theta0_deg)))
+    out = np.full(psi.shape, complex(n))
+    m = np.abs(np.exp(1j * psi) - 1) > 1e-12
+    out[m] = (1 - np.exp(1j * psi[m] * n)) / (1 - np.exp(1j * psi[m]))
+    return out
+
+
+# -- the beam pattern, eq. (2.13) -------------------------------------------------------------
+@pytest.mark.parametrize("theta0", [90.0, 60.0, 125.0])
+def test_beam_pattern_matches_eq_2_13(theta0):
+    fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
+    f0 = 250 * fs / nfft  # on a bin: the DFT of the tone is exactly A·N_DFT/2 there
+    pos = line_array(n_h, dx)
+    # Main lobe and the first sidelobe on each side: up to the second nulls of eq. (2.13),
+    # cos θ = cos θ0 ± 2 c / (f N δx).
+    du = 2 * C / (f0 * n_h * dx)
+    u0 = np.cos(np.deg2rad(theta0))
+    lo = np.rad2deg(np.arccos(min(1.0, u0 + du)))
+    hi = np.rad2deg(np.arccos(max(-1.0, u0 - du)))
+    x = plane_wave(nfft, fs, pos, theta0, f0, amp=2.0)
+    stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
+                          band=[f0 - 1, f0 + 1], beams={"start": lo, "stop": hi, "count": 801})
+    assert stage.freqs.size == 1 and abs(stage.freqs[0] - f0) < 1e-9
+    got = np.abs(y[0, 0]) ** 2 / (2.0 * nfft / 2) ** 2  # |Y|² / (A N_DFT / 2)²
+    want = np.abs(i_nh(stage.beam_axis, theta0, f0, n_h, dx)) ** 2
+    keep = want > want.max() * 10 ** (-40 / 10)  # away from the exact nulls
+    err_db = 10 * np.log10(got[keep] / want[keep])
+    assert np.max(np.abs(err_db)) < 0.1, np.max(np.abs(err_db))
+    # the peak is N_H² (eq. 2.14)
+    assert abs(10 * np.log10(got.max() / n_h**2)) < 0.1
+
+
+@pytest.mark.parametrize("theta0", [90.0, 60.0])
+def test_3db_beamwidth_matches_eq_2_41(theta0):
+    fs, nfft, n_h, dx = 5120.0, 1024, 64, 0.36
+    f0 = 200 * fs / nfft  # 1000 Hz
+    pos = line_array(n_h, dx)
+    x = plane_wave(nfft, fs, pos, theta0, f0)
+    stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
+                          band=[f0 - 1, f0 + 1],
+                          beams={"start": theta0 - 4, "stop": theta0 + 4, "count": 1601})
+    p = np.abs(y[0, 0]) ** 2
+    p_db = 10 * np.log10(p / p.max())
+    th = stage.beam_axis
+    k = int(np.argmax(p_db))
+    above = p_db >= -3.0103
+    a = k
+    while above[a - 1]:
+        a -= 1
+    b = k
+    while above[b + 1]:
+        b += 1
+    # linear interpolation of the two −3 dB crossings
+    left = np.interp(-3.0103, [p_db[a - 1], p_db[a]], [th[a - 1], th[a]])
+    right = np.interp(-3.0103, [p_db[b + 1], p_db[b]], [th[b + 1], th[b]])
+    width = np.deg2rad(right - left)
+    want = 0.886 * C / (f0 * n_h * dx * np.sin(np.deg2rad(theta0)))  # eq. (2.41)
+    assert abs(width / want - 1) < 0.03, (width, want)
+
+
+def test_array_gain_is_n_h(rng):
+    """White noise vs plane wave: SNR gain at the steered beam = 10 log10 N_H (thesis 2.1.1)."""
+    fs, nfft, n_h, dx = 2048.0, 512, 32, 0.75
+    pos = line_array(n_h, dx)
+    f0 = 150 * fs / nfft
+    theta0 = 70.0
+    n = nfft * 200
+    noise = rng.standard_normal((n, n_h))
+    sig = plane_wave(n, fs, pos, theta0, f0, amp=0.05)
+    kw = dict(nfft=nfft, hop=nfft, window="hann", band=[f0 - 40, f0 + 40],
+              beams={"start": theta0, "stop": theta0, "count": 1})
+    _, yn, _ = run_cbf(noise, fs, pos, **kw)
+    st_s, ys, _ = run_cbf(sig, fs, pos, **kw)
+    # per-hydrophone reference: the same DFTs without beamforming
+    w = time_window("hann", nfft)
+    xn = np.fft.rfft(noise.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
+    xs = np.fft.rfft(sig.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
+    fb = np.fft.rfftfreq(nfft, 1 / fs)
+    sel = (fb >= f0 - 40) & (fb <= f0 + 40)
+    kf = int(np.argmin(np.abs(st_s.freqs - f0)))
+    ks = int(np.argmin(np.abs(fb[sel] - f0)))
+    snr_in = np.mean(np.abs(xs[:, sel][:, ks]) ** 2) / np.mean(np.abs(xn[:, sel]) ** 2)
+    snr_out = np.mean(np.abs(ys[:, kf, 0]) ** 2) / np.mean(np.abs(yn[:, :, 0]) ** 2)
+    gain_db = 10 * np.log10(snr_out / snr_in)
+    assert abs(gain_db - 10 * np.log10(n_h)) < 0.3, gain_db
+    # and the noise output variance is N_DFT N_H σ² (thesis 2.1.1.1) for a rectangular window
+    _, yr, _ = run_cbf(noise, fs, pos, **{**kw, "window": "none"})
+    assert abs(np.mean(np.abs(yr) ** 2) / (nfft * n_h) - 1) < 0.03
+
+
+# -- against a plain numpy reference -----------------------------------------------------------
+def test_matches_numpy_reference_across_blocks(rng):
+    fs, n_h = 5120.0, 24
+    pos = line_array(n_h, 0.36)
+    pos[:, 0] += 0.013 * rng.standard_normal(n_h)  # a non-uniform line
+    x = rng.standard_normal((9000, n_h))
+    stage, y, out = run_cbf(x, fs, pos, sizes=(1000, 3333, 250), nfft=512, hop=384,
+                            window="hann", band=[300.0, 1800.0], batch=5)
+    n_frames = (9000 - 512) // 384 + 1  # 23
+    assert [o.data.shape[0] for o in out] == [5, 5, 5, 5, n_frames - 20]
+    starts = np.concatenate([o.meta["starts"] for o in out])
+    assert np.array_equal(starts, 384 * np.arange(y.shape[0]))
+    w = time_window("hann", 512)
+    for s in (0, 7, y.shape[0] - 1):
+        f, ref = beam_power_reference(x[starts[s]:starts[s] + 512], fs, pos, stage.beam_axis,
+                                      (300.0, 1800.0), C, w)
+        assert np.allclose(f, stage.freqs)
+        assert np.max(np.abs(y[s] - ref)) < 2e-5 * np.max(np.abs(ref))
+    times = np.concatenate([o.meta["times"] for o in out])
+    assert np.allclose(times, (starts + 256) / fs)
+
+
+def test_3d_beams_and_shading_against_einsum(rng):
+    fs = 4000.0
+    pos = rng.uniform(-1, 1, (12, 3))
+    x = rng.standard_normal((2048, 12))
+    beams = {"bearings": [0.0, 45.0, 180.0, 225.0, 300.0], "elevations": [-20.0, 0.0, 20.0]}
+    stage, y, _ = run_cbf(x, fs, pos, nfft=256, hop=256, window="hamming", band=[500, 1500],
+                          beams=beams, shading="hann")
+    assert stage.beam_axis.shape == (15, 2)
+    b, e = np.deg2rad(stage.beam_axis[:, 0]), np.deg2rad(stage.beam_axis[:, 1])
+    k = np.stack([np.cos(e) * np.cos(b), np.cos(e) * np.sin(b), -np.sin(e)], -1)
+    tau = k @ (pos - pos.mean(0)).T / C  # (B, C)
+    w = time_window("hamming", 256)
+    spec = np.fft.rfft(x[:256] * w[:, None], axis=0)
+    f = np.fft.rfftfreq(256, 1 / fs)
+    sel = (f >= 500) & (f <= 1500)
+    steer = stage.weights[None, None, :] * np.exp(-2j * np.pi * f[sel, None, None] * tau[None])
+    ref = np.einsum("fbc,fc->fb", steer, spec[sel])
+    assert np.max(np.abs(y[0] - ref)) < 2e-5 * np.max(np.abs(ref))
+
+
+def test_complex_baseband_input_equals_real_path(rng):
+    """CBF on complex baseband blocks (fc in meta) gives the same beams at f = fc + f_bb as
+    the real path gives from the positive-frequency part of the signal."""
+    fs, n_h, nfft = 2048.0, 16, 256
+    pos = line_array(n_h, 0.75)
+    x = rng.standard_normal((nfft, n_h))
+    spec = np.fft.fft(x, axis=0)
+    f = np.fft.fftfreq(nfft, 1 / fs)
+    spec[f <= 0] = 0  # keep the positive frequencies only
+    fc = 64 * fs / nfft
+    xa = np.fft.ifft(spec, axis=0) * np.exp(-2j * np.pi * fc * np.arange(nfft) / fs)[:, None]
+    blk = Block(xa.astype(np.complex64), ("time", "channel"), 0.0, nfft / fs, fs, pos, None,
+                meta={"n_valid": nfft, "sample0": 0, "fc": fc})
+    band = [fc - 100, fc + 100]
+    st_c = CBF(nfft=nfft, hop=nfft, window="none", band=band)
+    yc = next(iter(st_c.process(iter([blk]))))
+    st_r, yr, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=band)
+    assert np.allclose(st_c.freqs, st_r.freqs)
+    assert np.max(np.abs(yc.data[0] - yr[0])) < 1e-4 * np.max(np.abs(yr))
+
+
+# -- kernels against numpy references ------------------------------------------------------------
+def test_kernels_against_numpy(rng):
+    s_n, n_ch, nfft, nb = 3, 5, 16, 7
+    frames = rng.standard_normal((s_n, nfft, n_ch)).astype(np.float32)
+    win = rng.uniform(0.5, 1, nfft).astype(np.float32)
+    out = np.zeros((s_n + 2, n_ch, nfft), np.float32)
+    kb.window_transpose(frames, win, out)
+    assert np.allclose(out[:s_n], (frames * win[None, :, None]).transpose(0, 2, 1))
+    spec = (rng.standard_normal((s_n, n_ch, 9)) + 1j * rng.standard_normal((s_n, n_ch, 9)))
+    spec = spec.astype(np.complex64)
+    x2 = np.empty((4, 2 * s_n, n_ch), np.float32)
+    kb.pack_bins(spec, 2, x2)
+    assert np.array_equal(x2[:, :s_n], spec[:, :, 2:6].real.transpose(2, 0, 1))
+    assert np.array_equal(x2[:, s_n:], spec[:, :, 2:6].imag.transpose(2, 0, 1))
+    freqs = np.array([10.0, 20.0, 35.0, 40.0])
+    delays = rng.uniform(-1e-3, 1e-3, (4, n_ch))
+    weights = rng.uniform(0.5, 1.5, n_ch)
+    g = np.empty((4, n_ch, 8), np.float32)
+    kb.steering_real(freqs, delays, weights, g)
+    ref = weights[None, :, None] * np.exp(-2j * np.pi * freqs[:, None, None] * delays.T[None])
+    assert np.allclose(g[:, :, 0::2], ref.real, atol=1e-6)
+    assert np.allclose(g[:, :, 1::2], ref.imag, atol=1e-6)
+    # unpack: beam b = sign·direction uidx[b]; compare with the complex GEMM
+    uidx = np.array([0, 1, 2, 3, 0, 1, 3], np.int64)
+    sign = np.array([1, 1, 1, 1, -1, -1, -1], np.float32)
+    z = np.matmul(x2, g)
+    y = np.zeros((s_n, 6, nb), np.complex64)
+    kb.unpack_beams(z, uidx, sign, y, 1)
+    xc = spec[:, :, 2:6].transpose(2, 0, 1)  # (nf, S, C)
+    wc = ref[:, :, uidx]  # (nf, C, B)
+    wc[:, :, sign < 0] = np.conj(wc[:, :, sign < 0])
+    want = np.einsum("fsc,fcb->sfb", xc, wc)
+    assert np.allclose(y[:, 1:5], want, atol=1e-4)
+    assert np.all(y[:, [0, 5]] == 0)
+    # abs2 and window sums
+    p = np.empty(y.size, np.float32)
+    kb.abs2(y.reshape(-1), p)
+    assert np.allclose(p, np.abs(y.reshape(-1)) ** 2, rtol=1e-6)
+    q = rng.random((11, 4)).astype(np.float32)
+    for n, step in ((3, 1), (3, 3), (4, 2), (1, 1)):
+        k = (11 - n) // step + 1
+        o = np.empty((k, 4), np.float32)
+        kb.window_sums(q, n, step, o)
+        want = np.stack([q[i * step:i * step + n].sum(0) for i in range(k)])
+        assert np.allclose(o, want, rtol=1e-6)
+
+
+# -- properties ----------------------------------------------------------------------------------
+@settings(max_examples=12, deadline=None)
+@given(a=st.floats(-3, 3), b=st.floats(-3, 3), seed=st.integers(0, 2**31 - 1),
+       shift=st.integers(0, 3))
+def test_linearity_and_shift_invariance(a, b, seed, shift):
+    r = np.random.default_rng(seed)
+    fs, n_h, nfft, hop = 1000.0, 6, 64, 32
+    pos = line_array(n_h, 0.7)
+    x1 = r.standard_normal((640, n_h))
+    x2 = r.standard_normal((640, n_h))
+    kw = dict(nfft=nfft, hop=hop, window="hann", band=[50.0, 400.0],
+              beams={"start": 10.0, "stop": 170.0, "count": 17}, batch=4)
+    _, y1, _ = run_cbf(x1, fs, pos, sizes=(100,), **kw)
+    _, y2, _ = run_cbf(x2, fs, pos, sizes=(77,), **kw)
+    _, y12, _ = run_cbf(a * x1 + b * x2, fs, pos, sizes=(300,), **kw)
+    scale = np.max(np.abs(y1)) + np.max(np.abs(y2))
+    assert np.max(np.abs(y12 - (a * y1 + b * y2))) < 1e-4 * scale * (1 + abs(a) + abs(b))
+    # a delay of `shift` hops moves the snapshots by `shift`
+    xs = np.concatenate([np.zeros((shift * hop, n_h)), x1])
+    _, ys, _ = run_cbf(xs, fs, pos, sizes=(128,), **kw)
+    assert np.max(np.abs(ys[shift:shift + y1.shape[0]] - y1)) < 1e-4 * np.max(np.abs(y1))
+
+
+def test_shading_lowers_sidelobes_as_asked():
+    """Chebyshev shading: equiripple sidelobes at the requested level; Taylor: at most it."""
+    fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
+    f0 = 250 * fs / nfft
+    pos = line_array(n_h, dx)
+    x = plane_wave(nfft, fs, pos, 90.0, f0)
+    for kind, sll in (("chebyshev", 35.0), ("taylor", 30.0)):
+        stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
+                              band=[f0 - 1, f0 + 1],
+                              beams={"start": 0.0, "stop": 180.0, "count": 3601},
+                              shading=kind, sidelobe_db=sll)
+        p = 10 * np.log10(np.abs(y[0, 0]) ** 2)
+        p -= p.max()
+        k = int(np.argmax(p))
+        i = k
+        while p[i + 1] < p[i]:  # walk down the main lobe to the first null
+            i += 1
+        side = p[i:].max()
+        if kind == "chebyshev":
+            assert abs(side + sll) < 0.5, side
+        else:
+            assert side < -sll + 0.5, side
+
+
+def test_config_errors_name_the_key():
+    with pytest.raises(ConfigError, match="'beams'"):
+        CBF(beams={"start": 0, "stop": 190, "count": 3})
+    with pytest.raises(ConfigError, match="'beams'"):
+        CBF(beams={"bearing": [1, 2]})
+    with pytest.raises(ConfigError, match="'shading'"):
+        CBF(shading="kaiser")
+    with pytest.raises(ConfigError, match="'nfft'"):
+        build_chain({"stage": [{"type": "cbf", "nfft": 0}]})
