@@ -1,0 +1,157 @@
+"""Numba kernels of passive synthetic aperture processing (thesis ch. 2.1.2.2 and 2.2.3).
+
+Conventions: element spectra X (F, C) are ordered from the forward end aft, element n at body
+x = x_0 − n δx; a plane wave from cone angle θ (u = cos θ) reaches element n with the phase
+factor exp(+j 2π f x_n u / c) (numpy's DFT sign), and a beam removes it:
+Y(θ, f) = Σ_n X_n(f) exp(−j 2π f (x_n − x̄) u / c) — thesis eq. (2.8) with the DFT sign of
+numpy. References in plain numpy sit in ``tests/test_synthetic_kernels.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+TWO_PI = 2.0 * np.pi
+
+
+@njit(cache=True, parallel=True, fastmath=False)
+def subaperture_beams(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, dx: float,
+                      c: float, out: np.ndarray) -> None:
+    """Physical-aperture beams of one snapshot, thesis eq. (2.8), uniform line array.
+
+    ``x`` (F, C) complex64 element spectra (fore → aft), ``freqs`` (F,) Hz, ``u`` (B,) = cos θ,
+    ``x0`` body x of element 0 relative to the array centroid (m), ``dx`` spacing (m),
+    ``out`` (F, B) complex64. The geometric progression of the steering phases over the
+    elements is summed by Horner's rule: Σ_n X_n w_0 r^n with w_0 = exp(−j2πf x0 u/c) and
+    r = exp(+j2πf δx u/c).
+    """
+    n_f, n_c = x.shape
+    n_b = u.shape[0]
+    for f in prange(n_f):
+        k = TWO_PI * freqs[f] / c
+        acc_re = np.empty(n_b)
+        acc_im = np.empty(n_b)
+        r_re = np.empty(n_b)
+        r_im = np.empty(n_b)
+        for b in range(n_b):
+            ph = k * dx * u[b]
+            r_re[b] = np.cos(ph)
+            r_im[b] = np.sin(ph)
+            acc_re[b] = x[f, n_c - 1].real
+            acc_im[b] = x[f, n_c - 1].imag
+        for n in range(n_c - 2, -1, -1):
+            xr = x[f, n].real
+            xi = x[f, n].imag
+            for b in range(n_b):
+                ar = acc_re[b] * r_re[b] - acc_im[b] * r_im[b] + xr
+                ai = acc_re[b] * r_im[b] + acc_im[b] * r_re[b] + xi
+                acc_re[b] = ar
+                acc_im[b] = ai
+        for b in range(n_b):
+            ph = -k * x0 * u[b]
+            wr = np.cos(ph)
+            wi = np.sin(ph)
+            out[f, b] = complex(acc_re[b] * wr - acc_im[b] * wi, acc_re[b] * wi + acc_im[b] * wr)
+
+
+@njit(cache=True, parallel=True)
+def combine_subapertures(beams: np.ndarray, phase: np.ndarray, disp: np.ndarray,
+                         freqs: np.ndarray, u: np.ndarray, c: float, out: np.ndarray) -> None:
+    """Synthetic-aperture beams from sub-aperture beams, thesis eqs. (2.33)-(2.35).
+
+    Y(θ, f) = Σ_s B_s(θ, f) · exp(j Φ_s(f)) · exp(−j 2π f D_s u / c)
+
+    ``beams`` (S, F, B) complex64 sub-aperture beams, ``phase`` (S, F) the inter-snapshot
+    phase correction Φ_s (rad; −2π f (t_s − t_1) for ideal PSAS, the accumulated ETAM
+    correction of eq. (2.53) otherwise), ``disp`` (S,) along-track displacement D_s of each
+    snapshot's array centre from the first (m), ``freqs`` (F,) Hz, uniformly spaced, ``u`` (B,)
+    = cos θ, ``out`` (F, B) complex64. The displacement steering is advanced along frequency by
+    a complex recurrence (one multiply per cell instead of a sine and cosine).
+    """
+    n_s, n_f, n_b = beams.shape
+    df = freqs[1] - freqs[0] if n_f > 1 else 0.0
+    for b in prange(n_b):
+        acc_re = np.zeros(n_f)
+        acc_im = np.zeros(n_f)
+        for s in range(n_s):
+            a = -TWO_PI * disp[s] * u[b] / c
+            e_re = np.cos(a * freqs[0])
+            e_im = np.sin(a * freqs[0])
+            st_re = np.cos(a * df)
+            st_im = np.sin(a * df)
+            for f in range(n_f):
+                if f % 256 == 0:  # re-anchor the recurrence against rounding drift
+                    e_re = np.cos(a * freqs[f])
+                    e_im = np.sin(a * freqs[f])
+                p_re = np.cos(phase[s, f])
+                p_im = np.sin(phase[s, f])
+                w_re = e_re * p_re - e_im * p_im
+                w_im = e_re * p_im + e_im * p_re
+                v = beams[s, f, b]
+                acc_re[f] += v.real * w_re - v.imag * w_im
+                acc_im[f] += v.real * w_im + v.imag * w_re
+                t = e_re * st_re - e_im * st_im
+                e_im = e_re * st_im + e_im * st_re
+                e_re = t
+        for f in range(n_f):
+            out[f, b] = complex(acc_re[f], acc_im[f])
+
+
+@njit(cache=True)
+def etam_phase(xa: np.ndarray, xb: np.ndarray, shift: int, q: int, out: np.ndarray) -> None:
+    """ETAM phase correction between successive snapshots, thesis eqs. (2.53)-(2.54).
+
+    ``xa`` (F, C) spectra of snapshot b, ``xb`` of snapshot b+1 (elements fore → aft); the
+    array moved ``shift`` elements forward, so element n + shift of b and element n of b+1
+    sampled the same point. For each bin l,
+
+        Ψ_b(f_l) = arg( Σ_n ρ_n(f_l) Ξ_{b,n+shift}(f_l) Ξ*_{b+1,n}(f_l) / Σ_n ρ_n(f_l) ),
+
+    with ρ_n the coherence of the pair over the ``q`` bins centred on l (eq. 2.54; ``q`` odd,
+    truncated at the band edges). Multiplying snapshot b+1 by exp(jΨ_b) aligns its phase with
+    snapshot b. ``out`` (F,) float64.
+    """
+    n_f, n_c = xa.shape
+    n_pair = n_c - shift
+    h = q // 2
+    # Cumulative sums over frequency of the pair products and powers: ρ over any window in O(1).
+    cs = np.zeros((n_f + 1, n_pair), np.complex128)
+    pa = np.zeros((n_f + 1, n_pair))
+    pb = np.zeros((n_f + 1, n_pair))
+    for f in range(n_f):
+        for n in range(n_pair):
+            a = xa[f, n + shift]
+            b = xb[f, n]
+            cs[f + 1, n] = cs[f, n] + a * np.conj(b)
+            pa[f + 1, n] = pa[f, n] + a.real * a.real + a.imag * a.imag
+            pb[f + 1, n] = pb[f, n] + b.real * b.real + b.imag * b.imag
+    for f in range(n_f):
+        lo = max(0, f - h)
+        hi = min(n_f, f + h + 1)
+        num = 0.0 + 0.0j
+        for n in range(n_pair):
+            den = np.sqrt((pa[hi, n] - pa[lo, n]) * (pb[hi, n] - pb[lo, n]))
+            rho = np.abs(cs[hi, n] - cs[lo, n]) / den if den > 0 else 0.0
+            num += rho * (xa[f, n + shift] * np.conj(xb[f, n]))
+        # Dividing by Σρ (> 0) does not change the argument.
+        out[f] = np.arctan2(num.imag, num.real)
+
+
+@njit(cache=True, parallel=True)
+def beam_at(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, dx: float, c: float,
+            out: np.ndarray) -> None:
+    """One beam per bin: out[f] = Σ_n X[f, n] exp(−j2π f x_n u[f] / c), x_n = x0 − n δx.
+
+    The exact matched filter of a plane wave from direction cosine ``u[f]`` (eq. 2.8), used to
+    refine directions in the inverse beamformer. ``x`` (F, C) complex128, ``out`` (F,)
+    complex128.
+    """
+    n_f, n_c = x.shape
+    for f in prange(n_f):
+        k = TWO_PI * freqs[f] * u[f] / c
+        r = complex(np.cos(k * dx), np.sin(k * dx))
+        acc = x[f, n_c - 1]
+        for n in range(n_c - 2, -1, -1):
+            acc = acc * r + x[f, n]
+        out[f] = acc * complex(np.cos(-k * x0), np.sin(-k * x0))
