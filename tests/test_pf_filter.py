@@ -1,0 +1,111 @@
+"""RPF filter level: configuration, reproducibility, reduced Monte Carlo of the scenarios."""
+
+import numpy as np
+import pytest
+
+from arrayproc.errors import ConfigError
+from arrayproc.track.crlb import position_rmse_bound
+from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig
+from arrayproc.track.scenarios import get_scenario
+from arrayproc.track.tl import load_default_table
+
+
+@pytest.fixture(scope="module")
+def table():
+    return load_default_table()
+
+
+def test_config_errors(table):
+    with pytest.raises(ConfigError):
+        RegularizedParticleFilter(RPFConfig(use_levels=True, tl_table=None))
+    with pytest.raises(ConfigError):
+        RegularizedParticleFilter(RPFConfig(use_levels=False, resampling="stratified"))
+    with pytest.raises(ConfigError):
+        RegularizedParticleFilter(RPFConfig(use_levels=False, n_thr=0.0))
+    f = RegularizedParticleFilter(RPFConfig(use_levels=True, tl_table=table))
+    with pytest.raises(ConfigError):
+        f.run(np.arange(3) * 60.0, np.zeros((3, 2)), np.array([10.0, 11.0, 12.0]))
+    with pytest.raises(ConfigError):
+        f.run(np.arange(3) * 60.0, np.zeros((3, 2)), [10.0, np.nan, 12.0], [80.0, 80.0, 80.0])
+    with pytest.raises(ConfigError):
+        get_scenario("zigzag")
+
+
+def test_scenarios_match_the_paper():
+    m = get_scenario("manoeuvring")
+    assert m.times.size == 31 and get_scenario("static").times.size == 151
+    x0 = m.target_x0()
+    assert np.hypot(x0[2], x0[3]) == pytest.approx(5 * 1852 / 3600)
+    assert np.degrees(np.arctan2(x0[2], x0[3])) == pytest.approx(-140.0)
+    _, vel, course = m.observer.state(np.array([0.0, 779.0, 900.0, 1021.0, 1800.0]))
+    np.testing.assert_allclose(course[[0, 1, 3, 4]], [140.0, 140.0, 20.0, 20.0], atol=1e-9)
+    assert course[2] == pytest.approx(80.0)               # mid-turn at 30°/min, to port
+    np.testing.assert_allclose(np.hypot(vel[:, 0], vel[:, 1]), 5 * 1852 / 3600)
+    p = get_scenario("parallel")
+    np.testing.assert_allclose(p.observer.state(100.0)[1][0], x0[2:])    # parallel courses
+    np.testing.assert_allclose(get_scenario("static").observer_pos()[-1], [0.0, 0.0])
+
+
+def test_simulation_and_filter_are_seeded(table):
+    sc = get_scenario("manoeuvring")
+    a = sc.simulate(3, 5, table)
+    b = sc.simulate(3, 5, table)
+    assert a.bearings_deg.tobytes() == b.bearings_deg.tobytes()
+    assert a.levels_db.tobytes() == b.levels_db.tobytes()
+    f = RegularizedParticleFilter(RPFConfig(n_particles=500, tl_table=table))
+    r1 = f.run(a.times, a.observer_pos, a.bearings_deg[0], a.levels_db[0], seed=3)
+    r2 = f.run(a.times, a.observer_pos, a.bearings_deg[0], a.levels_db[0], seed=3)
+    r3 = f.run(a.times, a.observer_pos, a.bearings_deg[0], a.levels_db[0], seed=4)
+    assert r1.est.tobytes() == r2.est.tobytes()
+    assert not np.array_equal(r1.est, r3.est)
+    # measured bearings scatter around the truth with the paper's 1.5°
+    d = a.truth[:, :2] - a.observer_pos
+    true = np.degrees(np.arctan2(d[:, 0], d[:, 1]))
+    err = (a.bearings_deg - true + 180) % 360 - 180
+    assert 0.8 < err.std() < 2.2
+
+
+def _rmse(sc, est):
+    return np.sqrt(np.mean(sc.position_error(est) ** 2, axis=0))
+
+
+def test_manoeuvring_reduced_monte_carlo(table):
+    """Reduced version of SPL paper fig. 3: errors of kilometres before the turn, a sharp drop
+    during it (13-17 min), hundreds of metres after, never (much) below the BOT CRLB."""
+    sc = get_scenario("manoeuvring")
+    d = sc.simulate(12, 1, table)
+    crlb = position_rmse_bound(sc.crlb())
+    tmin = d.times / 60.0
+    for use in (False, True):
+        f = RegularizedParticleFilter(RPFConfig(n_particles=2000, use_levels=use, tl_table=table))
+        res = f.run_many(d.times, d.observer_pos, d.bearings_deg, d.levels_db if use else None,
+                         seed=11)
+        rm = _rmse(sc, res.est)
+        assert rm[tmin <= 13].min() > 2000
+        assert rm[(tmin >= 20) & (tmin <= 26)].mean() < 400
+        if not use:
+            ok = tmin >= 18
+            assert np.all(rm[ok] > 0.7 * crlb[ok])
+
+
+@pytest.mark.slow
+def test_paper_findings_200_runs(table):
+    """SPL paper section 5 with 200 runs: SPL beats BOT after the manoeuvre; static observer
+    table 1 shape (SPL an order of magnitude better at 36 and 63 min)."""
+    sc = get_scenario("manoeuvring")
+    d = sc.simulate(200, 3, table)
+    rm = {}
+    for use in (False, True):
+        f = RegularizedParticleFilter(RPFConfig(use_levels=use, tl_table=table))
+        rm[use] = _rmse(sc, f.run_many(d.times, d.observer_pos, d.bearings_deg,
+                                       d.levels_db if use else None, seed=5).est)
+    assert rm[True][-1] < rm[False][-1]
+    assert 0.6 * 146.17 < rm[True][-1] < 1.4 * 146.17
+    sc = get_scenario("static")
+    d = sc.simulate(200, 3, table)
+    for use in (False, True):
+        f = RegularizedParticleFilter(RPFConfig(use_levels=use, tl_table=table))
+        rm[use] = _rmse(sc, f.run_many(d.times, d.observer_pos, d.bearings_deg,
+                                       d.levels_db if use else None, seed=5).est)
+    for t in (36, 63):
+        assert rm[True][t] < 0.2 * rm[False][t]
