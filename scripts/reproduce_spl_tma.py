@@ -48,6 +48,10 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--particles", type=int, default=5000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--resampling", default="systematic", choices=["systematic", "multinomial"])
+    ap.add_argument("--bandwidth-scale", type=float, default=1.0,
+                    help="multiplier of the MISE-optimal bandwidth (paper: 1)")
+    ap.add_argument("--sigma-a", type=float, default=None,
+                    help="filter process noise, m/s^2 (paper: 1.5e-3)")
     ap.add_argument("--tl", default="munk_bellhopcxx_incoherent",
                     help="bundled TL table in data/tl (without .h5)")
     ap.add_argument("--json", default=None)
@@ -59,12 +63,15 @@ def main(argv: list[str] | None = None) -> dict:
     data = sc.simulate(args.runs, args.seed, tab)
     out: dict = {"scenario": sc.name, "runs": args.runs, "particles": args.particles,
                  "seed": args.seed, "resampling": args.resampling,
+                 "bandwidth_scale": args.bandwidth_scale,
+                 "sigma_a": 1.5e-3 if args.sigma_a is None else args.sigma_a, "tl": args.tl,
                  "threads": numba.get_num_threads(),
                  "tl_table": str(tab.attrs.get("description", ""))}
     rm = {}
     for label, use in (("bot", False), ("spl", True)):
         cfg = RPFConfig(n_particles=args.particles, use_levels=use, tl_table=tab,
-                        resampling=args.resampling,
+                        resampling=args.resampling, bandwidth_scale=args.bandwidth_scale,
+                        sigma_a=1.5e-3 if args.sigma_a is None else args.sigma_a,
                         sigma_bearing_deg=sc.sigma_bearing_deg,
                         sigma_level_db=sc.sigma_level_filter_db)
         f = RegularizedParticleFilter(cfg)
@@ -133,14 +140,19 @@ def main(argv: list[str] | None = None) -> dict:
     if args.plot:
         d = Path(args.plot)
         d.mkdir(parents=True, exist_ok=True)
+        tag = sc.name
+        if args.bandwidth_scale != 1.0 or args.sigma_a is not None:
+            tag += f"_h{args.bandwidth_scale:g}_sa{out['sigma_a']:g}"
         pts = {}
         if PAPER[sc.name]:
             ts = [v[0] for v in PAPER[sc.name].values()]
             pts = {"paper BOT": (ts, [v[1] for v in PAPER[sc.name].values()]),
                    "paper bearings + SPL": (ts, [v[2] for v in PAPER[sc.name].values()])}
         plot_rmse_curves(tmin, {"BOT (RPF)": rm["bot"], "bearings + SPL (RPF)": rm["spl"]},
-                         str(d / f"spl_tma_rmse_{sc.name}.png"), crlb=crlb,
-                         title=f"{sc.name} observer, {args.runs} runs, N = {args.particles}",
+                         str(d / f"spl_tma_rmse_{tag}.png"), crlb=crlb,
+                         title=f"{sc.name} observer, {args.runs} runs, N = {args.particles}"
+                         + ("" if tag == sc.name else f" (h × {args.bandwidth_scale:g}, "
+                            f"σ_a = {out['sigma_a']:g} m/s²)"),
                          paper_points=pts)
         plot_scenario_geometry(data.truth, data.observer_pos,
                                str(d / f"spl_tma_geometry_{sc.name}.png"),
