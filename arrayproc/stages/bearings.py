@@ -10,7 +10,9 @@ Per integrated snapshot:
 - narrowband (``lines = true``): each beam's spectrum is divided by its TPSW background
   (as in ``lofar``); a line is a frequency bin whose best beam stands ``line_threshold_db``
   over the background and is a local maximum in frequency; at each line the beam row is
-  peak-picked like the BTR (noise = its median over beams).
+  peak-picked like the BTR (noise = its median over beams), ignoring peaks more than
+  ``line_dynamic_db`` below the strongest one (the sidelobes of a line source: −13.3 dB for
+  an unshaded line array).
 
 Peaks are refined to sub-beam resolution by a parabola through the peak beam and its two
 neighbours (dB against cone angle). Rows (products ``bearings``, DESIGN section 4): ``time``
@@ -48,6 +50,9 @@ class Bearings(Stage):
         "lines": Param("bool", False, "pick peaks on narrowband (LOFAR) lines"),
         "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB"),
         "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB"),
+        "line_dynamic_db": Param("float", 10.0, "line peaks more than this below the line's "
+                                 "strongest peak are taken for its sidelobes, dB",
+                                 check=positive),
         "min_separation": Param("float", 4.0, "minimum separation of peaks, deg",
                                 check=lambda v: None if v >= 0 else "must be >= 0"),
         "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
@@ -67,9 +72,11 @@ class Bearings(Stage):
                               f"tpsw_window), got {self.tpsw_gap}")
 
     def _rows(self, t: float, heading: float, level_db: np.ndarray, cone: np.ndarray,
-              thr_db: float, f_lo: float, f_hi: float, rows: dict[str, list]) -> None:
+              thr_db: float, f_lo: float, f_hi: float, rows: dict[str, list],
+              dynamic_db: float = np.inf) -> None:
         noise_db = float(np.median(level_db))
-        for pos, lev, _ in pick_peaks(level_db, cone, noise_db + thr_db, self.min_separation,
+        floor = max(noise_db + thr_db, float(level_db.max()) - dynamic_db)
+        for pos, lev, _ in pick_peaks(level_db, cone, floor, self.min_separation,
                                       self.max_peaks):
             rows["time"].append(t)
             rows["cone_deg"].append(pos)
@@ -126,4 +133,5 @@ class Bearings(Stage):
         for fi in np.sort(cand):
             row_db = 10 * np.log10(np.maximum(spec[:, fi], 1e-300)) - lref
             self._rows(t, heading, row_db, cone, self.line_threshold_db,
-                       float(freqs[fi] - 0.5 * df), float(freqs[fi] + 0.5 * df), rows)
+                       float(freqs[fi] - 0.5 * df), float(freqs[fi] + 0.5 * df), rows,
+                       self.line_dynamic_db)
