@@ -194,7 +194,8 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
         us.append(np.where(present, u, 0.0))
         masks.append(present)
         kinds.append(remove)
-        info.append((present, 10 * np.log10(np.maximum(peak, 1e-300) / noise)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            info.append((present, 10 * np.log10(np.maximum(peak, 1e-300) / noise)))
         Um, Mm = np.stack(us, axis=1), np.stack(masks, axis=1)
         Um, A = joint_fit(X, freqs, x, Um, Mm, c, iters=fit_iters)
         us = list(Um.T)
