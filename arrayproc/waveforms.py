@@ -199,20 +199,26 @@ def wideband_ambiguity(received: np.ndarray, waveform: Waveform, fs: float,
     """
     x = np.asarray(received, dtype=float)
     n = x.size
-    out = np.empty((len(scales), n))
-    for i, d in enumerate(np.asarray(scales, dtype=float)):
-        rep = waveform(np.arange(int(np.ceil(waveform.duration / d * fs)) + 1) / fs * d)
-        m = fft.next_fast_len(n + rep.size)
-        X = fft.rfft(x, m)
-        R = fft.rfft(rep, m)
-        spec = X * np.conj(R)
-        full = np.zeros(m, dtype=complex)  # analytic signal of the correlation
-        full[0] = spec[0]
-        full[1:(m + 1) // 2] = 2 * spec[1:(m + 1) // 2]
-        if m % 2 == 0:
-            full[m // 2] = spec[m // 2]
-        corr = fft.ifft(full)
-        out[i] = np.abs(corr[:n]) / fs
+    scales = np.asarray(scales, dtype=float)
+    reps = [waveform(np.arange(int(np.ceil(waveform.duration / d * fs)) + 1) / fs * d)
+            for d in scales]
+    L = max(r.size for r in reps)
+    m = fft.next_fast_len(n + L)  # one FFT size (and plan) for every scale
+    X = fft.rfft(x, m)
+    h = np.zeros(m)  # one-sided weights: the inverse FFT gives the analytic correlation
+    h[0] = 1.0
+    h[1:(m + 1) // 2] = 2.0
+    if m % 2 == 0:
+        h[m // 2] = 1.0
+    out = np.empty((scales.size, n))
+    padded = np.zeros(L)
+    for i, rep in enumerate(reps):
+        padded[:] = 0.0
+        padded[: rep.size] = rep
+        spec = X * np.conj(fft.rfft(padded, m))
+        full = np.zeros(m, dtype=complex)
+        full[: spec.size] = spec * h[: spec.size]
+        out[i] = np.abs(fft.ifft(full)[:n]) / fs
     return out
 
 

@@ -35,7 +35,7 @@ def manoeuvring() -> dict:
 def exact_retarded(e: np.ndarray, t: float, mover) -> float:
     """c·τ = |e − x_S(t − τ)| by plain fixed-point iteration on the exact trajectory."""
     tau = 0.0
-    for _ in range(60):
+    for _ in range(15):  # error × (|v|/c < 0.01) per step: < 1e-20 s after 15
         tau = np.linalg.norm(e - mover.state3(np.array([t - tau]))[0][0]) / C
     return tau
 
@@ -44,7 +44,7 @@ def test_oneway_kernel_matches_numpy_reference():
     sim = Simulator(parse_scenario(manoeuvring(), "m.toml"))
     mover, sig, _ = sim.sources[0]
     rng = np.random.default_rng(0)
-    ks = np.sort(rng.choice(np.arange(2048, sim.n_samples), 60, replace=False))
+    ks = np.sort(rng.choice(np.arange(2048, sim.n_samples), 40, replace=False))
     worst_rel, worst_tau = 0.0, 0.0
     for k in ks:
         got = sim.render(int(k), int(k) + 1)[0].astype(float)
@@ -90,7 +90,7 @@ def test_echo_kernel_matches_numpy_reference():
     act = sim.active
     sc = act.scatterers[0]
     t_arr = act.windows["time"][0]
-    ks = (np.linspace(t_arr + 0.02, t_arr + 0.48, 40) * sim.fs).astype(int)
+    ks = (np.linspace(t_arr + 0.02, t_arr + 0.48, 25) * sim.fs).astype(int)
     worst = 0.0
     for k in ks:
         got = sim.render(int(k), int(k) + 1)[0].astype(float)

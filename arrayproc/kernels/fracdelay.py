@@ -17,8 +17,14 @@ output rate), the peak error of a unit sinusoid is below −70 dB at every fract
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from numba import njit, prange
+
+# Idle OpenMP workers sleep instead of spinning between the simulator's parallel kernels
+# (see arrayproc/sim/__init__.py); read when the OpenMP runtime starts.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 HALF_WIDTH = 6  # K: taps on each side
 KAISER_BETA = 8.0

@@ -20,7 +20,7 @@ import numpy as np
 from ..kernels.fracdelay import HALF_WIDTH, default_table
 from ..kernels.propagate import echo_accumulate
 from .motion import BodyOffsetMover, FixedMover, TrackMover
-from .propagation import LossLaw, Pose, forward_time, retarded_time
+from .propagation import LossLaw, Pose, forward_time, grid_nodes, retarded_time
 from .scenario import ActiveSpec
 from .sources import tonal_amplitude
 
@@ -170,8 +170,9 @@ class ActiveSim:
             "f1": wf.f1, "bits": int(wf.sequence.size), "taper": wf.taper,
             "level_db": self.spec.level_db, "offset": self.spec.offset}
 
-    def render(self, out: np.ndarray, t: np.ndarray, pose: Pose, body: np.ndarray) -> None:
-        """Add every echo overlapping the chunk at times ``t`` to ``out`` (n, ch) float32."""
+    def render(self, out: np.ndarray, k0: int, t: np.ndarray, pose: Pose,
+               body: np.ndarray) -> None:
+        """Add every echo overlapping the chunk (samples k0 …, times ``t``) to ``out``."""
         if self.windows["ping"].size == 0 or t.size == 0:
             return
         w = self.windows
@@ -186,12 +187,13 @@ class ActiveSim:
             sc = self.scatterers[int(w["target"][i])]
             tp = float(self.ping_times[int(w["ping"][i])])
             tw = t[i0:i1]
-            ref = pose.ref3[i0:i1]
-            tau2 = retarded_time(ref, tw, sc.mover, self.c)
-            ts = tw - tau2
+            # expansion points on the absolute grid (exact there), interpolated
+            tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
+            ts_g = tg - retarded_time(self.own.state3(tg)[0], tg, sc.mover, self.c)
+            te_g = ts_g - retarded_time(sc.mover.state3(ts_g)[0], ts_g, self.projector, self.c)
+            ts = np.interp(tw, tg, ts_g)
+            te = np.interp(tw, tg, te_g)
             tpos, tvel, tacc = sc.mover.state3(ts)
-            tau1 = retarded_time(tpos, ts, self.projector, self.c)
-            te = ts - tau1
             ppos, pvel, pacc = self.projector.state3(te)
             mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
             echo_accumulate(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw,

@@ -19,7 +19,7 @@ from ..kernels.propagate import oneway_accumulate
 from .active import ActiveSim, PingTrain
 from .motion import TrackMover
 from .noise import ambient_noise
-from .propagation import LossLaw, Pose, retarded_time
+from .propagation import LossLaw, Pose, grid_nodes, retarded_time
 from .scenario import Scenario, load_scenario
 from .sources import SourceSignal
 
@@ -130,10 +130,13 @@ class Simulator:
             return out
         t = (k0 + np.arange(n)) / self.fs
         pose = self.pose(t)
-        ref = pose.ref3
         margin = self.extent / self.c
+        # expansion points: exact reference retarded times on an absolute grid, interpolated
+        # (the kernels solve each element's retarded time exactly from there)
+        tg = grid_nodes(k0, k1, self.fs)
+        ref_g = self.own.state3(tg)[0]
         for mover, sig, depth in self.sources:
-            tau = retarded_time(ref, t, mover, self.c)
+            tau = np.interp(t, tg, retarded_time(ref_g, tg, mover, self.c))
             sp, sv, sa = mover.state3(t - tau)
             m0 = int(np.floor((t[0] - tau.max() - margin) * self.fs_src)) - HALF_WIDTH - 2
             m1 = int(np.ceil((t[-1] - tau.min() + margin) * self.fs_src)) + HALF_WIDTH + 3
@@ -144,7 +147,7 @@ class Simulator:
                               m0 / self.fs_src, self.fs_src, self.table, mode, r_t, gtab, g0,
                               gdr, 1.0)
         if self.active is not None:
-            self.active.render(out, t, pose, self.body)
+            self.active.render(out, k0, t, pose, self.body)
         if self.noise is not None:
             out += self.noise.block(k0, k1)
         return out

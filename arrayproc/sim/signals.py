@@ -84,8 +84,9 @@ class ShapedNoise:
         if w is None:
             ss = np.random.SeedSequence(self.seed, spawn_key=self.key + (k + KEY_OFFSET,))
             rng = np.random.default_rng(ss)
-            w = rng.standard_normal((self.frame, self.n_streams), dtype=np.float64)
-            w *= self.sigma
+            dt = np.float32 if (self.fir is None and self.dtype == np.float32) else np.float64
+            w = rng.standard_normal((self.frame, self.n_streams), dtype=dt)
+            w *= dt(self.sigma)
             self._white[k] = w
             if len(self._white) > 4:
                 self._white.popitem(last=False)

@@ -23,6 +23,7 @@ from .signals import UPA2, ShapedNoise
 
 KEY_TONAL = 11
 KEY_BROADBAND = 12
+LEVEL_GRID = 256  # source samples between evaluations of the speed-dependent level
 
 
 def tonal_amplitude(level_db: float) -> float:
@@ -101,7 +102,10 @@ class SourceSignal:
             nb = self.noise.block(m0, m1)[:, 0]
             if self.spec.broadband.model == "flat":
                 nb = nb * 10 ** (self.spec.broadband.level_db / 20.0)
-            else:
-                nb = nb * 10 ** (self.spectral_level_db(m / self.fs_src) / 20.0)
+            else:  # level from the speed, evaluated every LEVEL_GRID samples (absolute grid)
+                g0 = (m0 // LEVEL_GRID) * LEVEL_GRID
+                tg = np.arange(g0, m1 + LEVEL_GRID, LEVEL_GRID)
+                lv = self.spectral_level_db(tg / self.fs_src)
+                nb = nb * 10 ** (lv[(m - g0) // LEVEL_GRID] / 20.0)
             out += nb
         return out
