@@ -109,3 +109,27 @@ def test_paper_findings_200_runs(table):
                                        d.levels_db if use else None, seed=5).est)
     for t in (36, 63):
         assert rm[True][t] < 0.2 * rm[False][t]
+
+
+def test_rpf_through_the_tracker_registry():
+    """``filter = "rpf"`` in ``arrayproc track``: the step interface via track_bearings."""
+    from arrayproc.track.filters import FILTERS
+    from arrayproc.track.runner import track_bearings
+
+    assert "rpf" in FILTERS
+    sc = get_scenario("manoeuvring")
+    d = sc.simulate(1, 2)
+    own = np.hstack([d.observer_pos, sc.observer.state(d.times)[1]])
+    zs = np.deg2rad(d.bearings_deg[0])[:, None]
+    zs = (zs + np.pi) % (2 * np.pi) - np.pi
+    cfg = {"filter": "rpf", "model": "cv", "q1": (1.5e-3) ** 2 * 60.0, "q2": 0.0,
+           "sigma_bearing_deg": 1.5, "params": {"n_particles": 2000, "seed": 1},
+           "range_m": 10e3, "sigma_range_m": 2e3, "speed_mps": 1.54, "sigma_speed_mps": 1.03,
+           "sigma_course_deg": 51.96}
+    xs, ps, ws, status = track_bearings(d.times, zs, own, cfg)
+    assert status == 0
+    err = np.hypot(*(xs[-1, :2] + own[-1, :2] - d.truth[-1, :2]))
+    assert err < 600.0
+    assert np.all(np.linalg.eigvalsh(ps[-1]) > 0)
+    with pytest.raises(ConfigError):
+        track_bearings(d.times, zs, own, dict(cfg, model="ct"))

@@ -425,6 +425,36 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
         cov[k, :, :] = pcov
 
 
+@njit(cache=True)
+def rpf_step(parts, w, w_new, s, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta,
+             n_thr, resample_method, h, idx, src, mean, pcov, dmat):
+    """One bearings-only RPF cycle for a step-by-step tracker (absolute particle states):
+    prediction, update, regularization-resampling if N_eff < N_thr·N, moments. Same kernels
+    and draw order as :func:`rpf_run`. Returns ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``;
+    the caller adds the Gaussian normalising constant to get log p(θ | past)."""
+    n = parts.shape[0]
+    dummy = np.zeros(2)
+    llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, 0.0,
+                           1.0, True, False, dummy, 0.0, 1.0, dummy)
+    s, neff = reweight(w, s, ll, llmax, w_new)
+    w[:] = w_new
+    logev = llmax + math.log(s)
+    _moments(parts, w, s, mean, pcov)
+    done = False
+    if neff < n_thr * n and cholesky4(pcov, dmat):
+        if resample_method == 0:
+            systematic_resample(w, s, idx, state)
+        else:
+            multinomial_resample(w, s, idx, state)
+        src[:, :] = parts
+        regularise(parts, src, idx, dmat, h, state)
+        w[:] = 1.0
+        s = float(n)
+        done = True
+        _moments(parts, w, s, mean, pcov)
+    return s, logev, done
+
+
 @njit(cache=True, parallel=True)
 def rpf_monte_carlo(theta, level, use_theta0, use_level, times, obs, seeds, n_particles, n_thr,
                     sigma_a, sig_theta, sig_level, prior, sl_par, tl_r0, tl_dr, tl,

@@ -156,3 +156,9 @@ def make_filter(name: str, model: MotionModel, sigma_deg: float = 1.5,
         return cls(model, sigma_deg, **params)
     except TypeError as e:
         raise ConfigError(f"tracker: bad parameter for filter {name!r}: {e}") from None
+
+
+# Issue 7: the regularized particle filter (bearings only) through the same step interface.
+from .pf import RPFTracker  # noqa: E402
+
+FILTERS["rpf"] = RPFTracker  # type: ignore[assignment]

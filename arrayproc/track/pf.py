@@ -10,6 +10,7 @@ the level term switched off. The per-particle work is in :mod:`arrayproc.kernels
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +21,7 @@ from ..kinematics import KNOT
 from .spl import ROSS_SURFACE_SHIP, SourceLevelModel
 from .tl.table import TLTable
 
-__all__ = ["RPFConfig", "RPFResult", "RegularizedParticleFilter", "run_seeds"]
+__all__ = ["RPFConfig", "RPFResult", "RegularizedParticleFilter", "RPFTracker", "run_seeds"]
 
 
 @dataclass
@@ -138,3 +139,85 @@ class RegularizedParticleFilter:
                             None if levels_db is None else np.asarray(levels_db)[None],
                             seed=seed)
         return RPFResult(res.est[0], res.cov[0], res.resampled[0])
+
+
+class RPFTracker:
+    """Step-by-step bearings-only RPF with the interface of :mod:`arrayproc.track.filters`
+    (``initialize``, ``predict``, ``update`` → log-likelihood, attributes ``x``, ``P`` — the
+    relative state [x, y, ẋ, ẏ] and covariance), so that ``arrayproc track`` and the L-R
+    resolver can use it (``filter = "rpf"``). CV model only.
+
+    ``initialize`` draws the particles from N(x0, P0) (the runner's linearised polar prior).
+    The process noise is ``sigma_a`` (m/s²) if given, else σ_a² = q1 / T from the model's
+    white-noise intensity (the same velocity variance per step). ``update`` returns
+    log p(θ_k | θ_1..k−1) ≈ log Σ w_i N(θ_k; h(x_i), σ²).
+    """
+
+    name = "rpf"
+
+    def __init__(self, model, sigma_deg: float = 1.5, n_particles: int = 5000,
+                 n_thr: float = 1.0 / 3.0, sigma_a: float | None = None,
+                 resampling: str = "systematic", bandwidth_scale: float = 1.0,
+                 seed: int = 0) -> None:
+        if getattr(model, "dim", 4) != 4:
+            raise ConfigError("tracker: the rpf filter supports the cv model only")
+        if not sigma_deg > 0 or n_particles < 2 or not 0 < n_thr <= 1:
+            raise ConfigError("tracker: rpf needs sigma_bearing_deg > 0, n_particles >= 2, "
+                              "0 < n_thr <= 1")
+        if resampling not in ("systematic", "multinomial"):
+            raise ConfigError("tracker: rpf resampling must be 'systematic' or 'multinomial'")
+        self.model = model
+        self.sigma = math.radians(float(sigma_deg))
+        self.n = int(n_particles)
+        self.n_thr = float(n_thr)
+        self.sigma_a = sigma_a
+        self.method = 0 if resampling == "systematic" else 1
+        self.h = float(bandwidth_scale) * kpf.bandwidth(self.n)
+        self.state = np.array([run_seeds(int(seed), 1, tag=3)[0]], dtype=np.uint64)
+        self.parts = np.zeros((self.n, 4))      # relative states between calls
+        self.w = np.ones(self.n)
+        self.s = float(self.n)
+        self._scratch = (np.empty(self.n), np.empty(self.n), np.empty(self.n, np.int64),
+                         np.empty((self.n, 4)), np.empty(4), np.empty((4, 4)), np.empty((4, 4)))
+        self.x = np.zeros(4)
+        self.P = np.eye(4)
+        self._pending: tuple | None = None
+        self.n_resampled = 0
+
+    def initialize(self, x0: np.ndarray, P0: np.ndarray) -> None:
+        x0 = np.asarray(x0, float).reshape(4)
+        d = np.linalg.cholesky(np.asarray(P0, float).reshape(4, 4))
+        z = kpf.normal_block(self.state, 2 * self.n).reshape(self.n, 4)
+        self.parts = x0 + z @ d.T
+        self.w[:] = 1.0
+        self.s = float(self.n)
+        self.x, self.P = x0.copy(), np.asarray(P0, float).reshape(4, 4).copy()
+
+    def predict(self, T: float, own_prev: np.ndarray, own_next: np.ndarray) -> None:
+        """Store the step; the particles move in :meth:`update` (one fused kernel)."""
+        self._pending = (float(T), np.asarray(own_prev, float), np.asarray(own_next, float))
+
+    def update(self, bearing_deg: float) -> float:
+        from .filters import FilterDivergence
+
+        if self._pending is None:
+            T, own_prev, own_next = 0.0, np.zeros(4), np.zeros(4)
+        else:
+            T, own_prev, own_next = self._pending
+        self._pending = None
+        sa = self.sigma_a if self.sigma_a is not None else (
+            math.sqrt(self.model.q1 / T) if T > 0 else 0.0)
+        ww, ll, idx, src, mean, pcov, dmat = self._scratch
+        absolute = self.parts + own_prev               # eq. (4): x + x^o, then F, then − x^o'
+        s, logev, done = kpf.rpf_step(absolute, self.w, ww, self.s, ll, self.state, T, sa,
+                                      own_next[0], own_next[1], math.radians(bearing_deg),
+                                      self.sigma, self.n_thr, self.method, self.h, idx, src,
+                                      mean, pcov, dmat)
+        self.parts = absolute - own_next
+        self.s = s
+        self.n_resampled += int(done)
+        self.x = mean - own_next
+        self.P = pcov.copy()
+        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+            raise FilterDivergence("rpf: non-finite state")
+        return float(logev - math.log(math.sqrt(2 * math.pi) * self.sigma))
