@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import os
 import time
 from pathlib import Path
 
@@ -83,6 +84,29 @@ def stonesoup_run(sc, times, obs, bearings_deg, n, seed):
     return est
 
 
+def speed_spl(name: str, runs: int, n: int, seed: int) -> dict:
+    """Wall and CPU time of ``runs`` bearings+SPL RPF runs (all threads of this process)."""
+    sc = get_scenario(name)
+    tab = load_default_table()
+    data = sc.simulate(runs, seed, tab)
+    f = RegularizedParticleFilter(RPFConfig(n_particles=n, use_levels=True, tl_table=tab))
+    f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3],
+               data.levels_db[:1, :3])
+    c0, t0 = time.process_time(), time.perf_counter()
+    f.run_many(data.times, data.observer_pos, data.bearings_deg, data.levels_db, seed=seed)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    steps = data.times.size
+    load = os.getloadavg()[0]
+    print(f"bearings+SPL RPF, {name}: {runs} runs x {steps} steps x N = {n}: wall {wall:.1f} s "
+          f"on {numba.get_num_threads()} threads, CPU {cpu:.1f} s "
+          f"({cpu / (runs * steps * n) * 1e9:.0f} ns per particle-step; "
+          f"{cpu / 2:.1f} s if two cores were ours alone); 1-min load average {load:.1f}")
+    return {"speed_scenario": name, "speed_runs": runs, "speed_steps": steps,
+            "speed_wall_s": wall, "speed_cpu_s": cpu, "speed_threads": numba.get_num_threads(),
+            "speed_ns_per_particle_step": cpu / (runs * steps * n) * 1e9,
+            "load_average_1min": load}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="manoeuvring")
@@ -90,14 +114,21 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=1000, help="arrayproc RPF runs")
     ap.add_argument("--particles", type=int, default=5000)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--speed-scenario", default="static",
+                    help="scenario of the bearings+SPL throughput measurement (151 steps)")
+    ap.add_argument("--speed-runs", type=int, default=0,
+                    help="runs of the bearings+SPL throughput measurement (0: skip)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
+    out: dict = {}
+    if args.speed_runs:
+        out.update(speed_spl(args.speed_scenario, args.speed_runs, args.particles, args.seed))
 
     sc = get_scenario(args.scenario)
     tab = load_default_table()
     runs = max(args.runs, args.runs_ss)
     data = sc.simulate(runs, args.seed, tab)
-    out: dict = {"scenario": sc.name, "particles": args.particles, "steps": data.times.size}
+    out.update({"scenario": sc.name, "particles": args.particles, "steps": data.times.size})
 
     f = RegularizedParticleFilter(RPFConfig(n_particles=args.particles, use_levels=False))
     f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3])   # compile
