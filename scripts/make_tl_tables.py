@@ -15,6 +15,7 @@ The comparison (smoothed over ±500 m in range, receiver at 300 m, 1-30 km) goes
 ``--json`` (default data/tl/tl_comparison.json).
 
 Usage: python scripts/make_tl_tables.py [--out data/tl] [--json FILE] [--skip-ram]
+       python scripts/make_tl_tables.py --plot DIR     (figures from the cached tables only)
 """
 
 from __future__ import annotations
@@ -47,13 +48,56 @@ def smoothed(tab: TLTable, ranges: np.ndarray, half_window: float = 500.0) -> np
     return np.array([-10 * np.log10(inten[np.abs(r - x) <= half_window].mean()) for x in ranges])
 
 
+def plot_tables(tl_dir: Path, out_dir: Path) -> None:
+    """TL field of the main table (cf. SPL paper fig. 1) and the models at 300 m."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    main_tab = TLTable.load(tl_dir / "munk_bellhopcxx_incoherent.h5")
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    im = ax.pcolormesh(main_tab.range_m / 1e3, main_tab.rcv_depth_m, main_tab.tl_db[0],
+                       vmin=50, vmax=100, cmap="jet_r", shading="auto")
+    ax.invert_yaxis()
+    ax.set_xlabel("range (km)")
+    ax.set_ylabel("receiver depth (m)")
+    ax.set_title("TL, SPL paper appendix environment, bellhopcxx incoherent, source 5 m, 50 Hz")
+    fig.colorbar(im, ax=ax, label="TL (dB re 1 m)")
+    fig.savefig(out_dir / "tl_field_bellhopcxx_incoherent.png", dpi=110)
+    plt.close(fig)
+    r = np.arange(0.0, 50e3 + 1, 20.0)
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    for name, label in (("munk_bellhopcxx_incoherent", "bellhopcxx incoherent (paper's)"),
+                        ("munk_bellhop_fortran_incoherent_300m", "Fortran BELLHOP incoherent"),
+                        ("munk_bellhopcxx_incoherent_dbperm",
+                         "bellhopcxx incoherent, bottom 0.8 dB/m ('CVM')"),
+                        ("munk_bellhopcxx_semicoherent_300m", "bellhopcxx semi-coherent"),
+                        ("munk_ram_band_300m", "RAM PE, 45-55 Hz average")):
+        t = TLTable.load(tl_dir / f"{name}.h5")
+        ax.plot(r / 1e3, t(r, SRC, RCV), lw=1.0, label=label)
+    ax.set_xlabel("range (km)")
+    ax.set_ylabel("TL (dB re 1 m)")
+    ax.set_title("TL at 300 m receiver depth, source 5 m, 50 Hz")
+    ax.set_ylim(100, 40)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(out_dir / "tl_models_300m.png", dpi=110)
+    plt.close(fig)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "data" / "tl"))
     ap.add_argument("--json", default=None)
     ap.add_argument("--skip-ram", action="store_true")
+    ap.add_argument("--plot", default=None, help="only draw figures from the cached tables")
     args = ap.parse_args()
     out = Path(args.out)
+    if args.plot:
+        plot_tables(out, Path(args.plot))
+        return
     out.mkdir(parents=True, exist_ok=True)
     report: dict = {}
 
