@@ -172,32 +172,36 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
     half = table.shape[1] // 2
     ns = sig.shape[0]
     two_pi = 2.0 * math.pi
-    for ch in prange(nch):
-        bx = body[ch, 0]
-        by0 = body[ch, 1]
-        bz = body[ch, 2]
-        for k in range(n):
-            by = by0 + lateral[k]
-            ex = rpos[k, 0] + bx * sin_h[k] + by * cos_h[k]
-            ey = rpos[k, 1] + bx * cos_h[k] - by * sin_h[k]
-            ez = rdepth[k] + bz
-            # receive leg: c·τ2 = |e − x_T(t − τ2)|, t_s = t − τ2
-            tau2 = _solve(ex, ey, ez, t[k] - ts_ref[k], tpos, tvel, tacc, k, c)
-            ts = t[k] - tau2
-            d2 = ts - ts_ref[k]
-            hd = 0.5 * d2 * d2
-            tx = tpos[k, 0] + tvel[k, 0] * d2 + tacc[k, 0] * hd
-            ty = tpos[k, 1] + tvel[k, 1] * d2 + tacc[k, 1] * hd
-            tz = tpos[k, 2] + tvel[k, 2] * d2 + tacc[k, 2] * hd
-            # transmit leg: c·τ1 = |x_T(t_s) − x_P(t_s − τ1)|, t_e = t_s − τ1
-            tau1 = _solve(tx, ty, tz, ts - te_ref[k], ppos, pvel, pacc, k, c)
-            tp = ts - tau1 - t_ping  # pulse time of the emission
-            if alpha != 0.0:  # thesis eq. (4.6)
-                s = two_pi * tp / pulse_len
-                tp = tp + alpha * math.sin(s) * (1.0 - math.cos(s))
-            u = (tp - sig_t0) * fs_src
-            if u < half - 1 or u >= ns - half - 1:
-                continue
-            g = (_gain(c * tau2, amp_mode, r_t, gtab, g_r0, g_dr)
-                 * _gain(c * tau1, amp_mode, r_t, gtab, g_r0, g_dr))
-            out[k0 + k, ch] += scale * g * interp_one(sig, u, table)
+    nblk = (n + BLOCK - 1) // BLOCK
+    for b in prange(nblk):
+        for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            sh = sin_h[k]
+            chd = cos_h[k]
+            lat = lateral[k]
+            tk = t[k]
+            tau0 = tk - ts_ref[k]
+            for ch in range(nch):
+                by = body[ch, 1] + lat
+                ex = rpos[k, 0] + body[ch, 0] * sh + by * chd
+                ey = rpos[k, 1] + body[ch, 0] * chd - by * sh
+                ez = rdepth[k] + body[ch, 2]
+                # receive leg: c·τ2 = |e − x_T(t − τ2)|, t_s = t − τ2
+                tau2 = _solve(ex, ey, ez, tau0, tpos, tvel, tacc, k, c)
+                ts = tk - tau2
+                d2 = ts - ts_ref[k]
+                hd = 0.5 * d2 * d2
+                tx = tpos[k, 0] + tvel[k, 0] * d2 + tacc[k, 0] * hd
+                ty = tpos[k, 1] + tvel[k, 1] * d2 + tacc[k, 1] * hd
+                tz = tpos[k, 2] + tvel[k, 2] * d2 + tacc[k, 2] * hd
+                # transmit leg: c·τ1 = |x_T(t_s) − x_P(t_s − τ1)|, t_e = t_s − τ1
+                tau1 = _solve(tx, ty, tz, ts - te_ref[k], ppos, pvel, pacc, k, c)
+                tp = ts - tau1 - t_ping  # pulse time of the emission
+                if alpha != 0.0:  # thesis eq. (4.6)
+                    s = two_pi * tp / pulse_len
+                    tp = tp + alpha * math.sin(s) * (1.0 - math.cos(s))
+                u = (tp - sig_t0) * fs_src
+                if u < half - 1 or u >= ns - half - 1:
+                    continue
+                g = (_gain(c * tau2, amp_mode, r_t, gtab, g_r0, g_dr)
+                     * _gain(c * tau1, amp_mode, r_t, gtab, g_r0, g_dr))
+                out[k0 + k, ch] += scale * g * interp_one(sig, u, table)
