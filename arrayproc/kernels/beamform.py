@@ -129,3 +129,73 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
                     acc[i] += p[j, i]
         for i in range(m):
             out[k, i] = acc[i]
+
+
+# -- centro-symmetric arrays (e.g. uniform line arrays): fold element pairs --------------------
+# Elements i and j with r_i − r̄ = −(r_j − r̄) and equal shading have opposite delays, so
+#   w e^{−jφ} X_i + w e^{+jφ} X_j = w cos φ (X_i + X_j) − j w sin φ (X_i − X_j),
+# and a beam is Y = A − jB with A = Σ_k w_k cos φ_k S_k, B = Σ_k w_k sin φ_k D_k over the K
+# pairs (S = X_i + X_j, D = X_i − X_j): two real GEMMs of depth K = N/2 instead of one of depth
+# N, half the arithmetic again. The opposite direction is A + jB.
+
+
+@njit(cache=True, nogil=True)
+def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
+              out_s: np.ndarray, out_d: np.ndarray) -> None:
+    """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of
+    ``spec`` (S, C, F): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
+    in rows S..2S-1. A centre element (pi == pj) gives S = X, D = 0."""
+    nf, s2, nk = out_s.shape
+    ns = s2 // 2
+    for s in range(ns):
+        for k in range(nk):
+            i, j = pi[k], pj[k]
+            for f in range(nf):
+                a = spec[s, i, first_bin + f]
+                if i == j:
+                    out_s[f, s, k] = a.real
+                    out_s[f, ns + s, k] = a.imag
+                    out_d[f, s, k] = 0.0
+                    out_d[f, ns + s, k] = 0.0
+                else:
+                    b = spec[s, j, first_bin + f]
+                    out_s[f, s, k] = a.real + b.real
+                    out_s[f, ns + s, k] = a.imag + b.imag
+                    out_d[f, s, k] = a.real - b.real
+                    out_d[f, ns + s, k] = a.imag - b.imag
+
+
+@njit(cache=True, nogil=True)
+def steering_fold(freqs: np.ndarray, delays: np.ndarray, weights: np.ndarray,
+                  out_c: np.ndarray, out_s: np.ndarray) -> None:
+    """``out_c[f, k, u] = w_k cos(2π f τ_uk)``, ``out_s[f, k, u] = w_k sin(2π f τ_uk)`` for the
+    first element of each pair; freqs (F,), delays (U, K) s, weights (K,), outs (F, K, U)."""
+    nf = freqs.shape[0]
+    nu, nk = delays.shape
+    for f in range(nf):
+        w0 = 2.0 * math.pi * freqs[f]
+        for k in range(nk):
+            for u in range(nu):
+                ph = w0 * delays[u, k]
+                out_c[f, k, u] = weights[k] * math.cos(ph)
+                out_s[f, k, u] = weights[k] * math.sin(ph)
+
+
+@njit(cache=True, nogil=True)
+def unpack_fold(za: np.ndarray, zb: np.ndarray, uidx: np.ndarray, sign: np.ndarray,
+                y: np.ndarray, f_off: int) -> None:
+    """Beams from the folded GEMMs ``za`` = [Sr; Si]·C and ``zb`` = [Dr; Di]·S, (nf, 2S, U):
+    Y(+u) = A − jB = (Ar + Bi) + j(Ai − Br), Y(−u) = A + jB, into y (S, F, B) complex64."""
+    nf = za.shape[0]
+    ns = za.shape[1] // 2
+    nb = uidx.shape[0]
+    for f in range(nf):
+        for s in range(ns):
+            for b in range(nb):
+                u = uidx[b]
+                sg = sign[b]
+                ar = za[f, s, u]
+                ai = za[f, ns + s, u]
+                br = zb[f, s, u]
+                bi = zb[f, ns + s, u]
+                y[s, f_off + f, b] = complex(ar + sg * bi, ai - sg * br)

@@ -30,8 +30,10 @@ each snapshot's centre time (s) and ``meta["headings"]`` the array heading (deg)
 Implementation: rfft of all frames of a batch through :mod:`arrayproc.fft`, then per bin one
 *real* GEMM of the paired steering rows against the stacked real/imaginary snapshots (see
 :mod:`arrayproc.kernels.beamform`): beams in opposite directions (θ and 180° − θ) share their
-rows, which halves the work of a complex GEMM for the usual symmetric fan. Bins are split over
-``threads`` worker threads, each running single-threaded BLAS.
+rows, which halves the work of a complex GEMM for the usual symmetric fan. Fast path for
+centro-symmetric arrays (uniform line arrays, symmetric shading): element pairs are folded into
+sums and differences, two real GEMMs of half depth, halving the work again. Bins are split
+over ``threads`` worker threads, each running single-threaded BLAS.
 """
 
 from __future__ import annotations
@@ -157,6 +159,22 @@ def element_delays(positions: np.ndarray, unique_dirs: np.ndarray, mode: str,
     return (unique_dirs @ rel.T) / sound_speed
 
 
+def symmetric_pairs(rel: np.ndarray, weights: np.ndarray,
+                    tol: float = 1e-6) -> tuple[np.ndarray, np.ndarray] | None:
+    """Element pairs (i, j) with ``rel[j] = −rel[i]`` and equal weights (a centre element
+    pairs with itself), or None if the array is not centro-symmetric. ``rel`` (C, 3) m are
+    positions relative to the centroid."""
+    n = rel.shape[0]
+    d = np.abs(rel[:, None, :] + rel[None, :, :]).max(axis=2)  # |r_i + r_j|
+    match = np.argmin(d, axis=1)
+    if np.any(d[np.arange(n), match] > tol) or np.any(match[match] != np.arange(n)):
+        return None
+    if np.any(np.abs(weights - weights[match]) > 1e-9 * np.abs(weights).max()):
+        return None
+    keep = np.arange(n) <= match
+    return np.flatnonzero(keep), match[keep]
+
+
 @register
 class CBF(Stage):
     """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
@@ -222,19 +240,37 @@ class CBF(Stage):
         self.freqs = f_all[idx]
         weights = shading_weights(self.shading, b.positions, self.sidelobe_db)
         delays = element_delays(b.positions, self._unique, self.beam_mode, self.ctx.sound_speed)
-        g = np.empty((idx.size, b.positions.shape[0], 2 * len(self._unique)), np.float32)
-        kb.steering_real(self.freqs.astype(np.float64), delays, weights.astype(np.float64), g)
-        self._steer = g
-        self.weights = weights
+        self.weights, self._delays = weights, delays
+        rel = np.asarray(b.positions, float) - np.asarray(b.positions, float).mean(axis=0)
+        if self.beam_mode == "cone":
+            rel[:, 1:] = 0.0
+        pairs = symmetric_pairs(rel, weights)
+        f64 = self.freqs.astype(np.float64)
+        nu = len(self._unique)
+        if pairs is not None:  # fast path: fold element pairs (uniform line arrays and the like)
+            pi, pj = pairs
+            self._pairs = (pi.astype(np.int64), pj.astype(np.int64))
+            gc = np.empty((idx.size, pi.size, nu), np.float32)
+            gs = np.empty((idx.size, pi.size, nu), np.float32)
+            kb.steering_fold(f64, np.ascontiguousarray(delays[:, pi]),
+                             weights[pi].astype(np.float64), gc, gs)
+            self._steer = (gc, gs)
+        else:
+            self._pairs = None
+            g = np.empty((idx.size, b.positions.shape[0], 2 * nu), np.float32)
+            kb.steering_real(f64, delays, weights.astype(np.float64), g)
+            self._steer = g
+
+    @property
+    def folded(self) -> bool:
+        """Whether the centro-symmetric fast path (element pairs folded) is in use."""
+        return self._pairs is not None
 
     def steering_matrix(self) -> np.ndarray:
-        """Complex steering weights (F, B, C) applied to the DFTs (for references and tests)."""
-        g = self._steer
-        c = (g[:, :, 0::2] + 1j * g[:, :, 1::2]).transpose(0, 2, 1)
-        out = c[:, self._uidx, :]
-        neg = self._sign < 0
-        out[:, neg, :] = np.conj(out[:, neg, :])
-        return out
+        """Complex weights (F, B, C) applied to the DFTs: w_n e^{−j2πfτ_n} (for references)."""
+        tau = self._delays[self._uidx] * self._sign[:, None]  # (B, C)
+        return self.weights[None, None, :] * np.exp(
+            -2j * np.pi * self.freqs[:, None, None] * tau[None])
 
     # -- compute -----------------------------------------------------------------------
     def beamform(self, frames: np.ndarray) -> np.ndarray:
@@ -267,12 +303,23 @@ class CBF(Stage):
         y = np.empty((s_n, nf, nb), np.complex64)
         steer, uidx, sign = self._steer, self._uidx, self._sign
 
+        pairs = self._pairs
+
         def task(a: int) -> None:
             e = min(nf, a + BINS_PER_TASK)
-            x2 = np.empty((e - a, 2 * s_n, n_ch), np.float32)
-            kb.pack_bins(spec, first + a, x2)
-            z = np.matmul(x2, steer[a:e])
-            kb.unpack_beams(z, uidx, sign, y, a)
+            if pairs is not None:
+                k = pairs[0].size
+                xs = np.empty((e - a, 2 * s_n, k), np.float32)
+                xd = np.empty((e - a, 2 * s_n, k), np.float32)
+                kb.pack_fold(spec, first + a, pairs[0], pairs[1], xs, xd)
+                za = np.matmul(xs, steer[0][a:e])
+                zb = np.matmul(xd, steer[1][a:e])
+                kb.unpack_fold(za, zb, uidx, sign, y, a)
+            else:
+                x2 = np.empty((e - a, 2 * s_n, n_ch), np.float32)
+                kb.pack_bins(spec, first + a, x2)
+                z = np.matmul(x2, steer[a:e])
+                kb.unpack_beams(z, uidx, sign, y, a)
 
         starts = range(0, nf, BINS_PER_TASK)
         if n_thr <= 1:

@@ -1,0 +1,153 @@
+"""Benchmark of the ``cbf`` stage (issue 4) against a plain per-snapshot numpy CBF.
+
+Configuration (issue 4): 64 channels, 5120 Hz, nfft 2048, hop 1024, 181 cone-angle beams
+0..180°, band 100-2000 Hz (761 bins), Hann window, float32 data. The stage is fed 8192-sample
+time blocks of white noise from a generator (no disk I/O), exactly as the chain reader would.
+
+Printed (and written with ``--json``):
+
+- ``cbf``: multiples of real time of the stage (data seconds / wall seconds), best of
+  ``--repeat`` runs over ``--seconds`` of data, and the same for ``cbf + integrate`` (N_B = 8);
+- ``numpy_ref``: the same for a plain numpy CBF, one snapshot at a time (``np.fft.rfft`` of
+  the windowed frame, then ``np.einsum("fbc,fc->fb", steering, spectrum)`` with a precomputed
+  complex64 steering matrix), measured in the same process on ``--ref-snapshots`` snapshots;
+- the ratio of the two;
+- peak traced memory (tracemalloc: numpy allocations included) of the stage over two data
+  lengths, to show it does not grow with the length of the input.
+
+The 1-minute load average is printed with the results: the machine is shared.
+
+    .venv/bin/python scripts/bench_cbf.py [--seconds 60] [--repeat 3] [--json OUT]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+import tracemalloc
+
+import numpy as np
+
+from arrayproc.block import Block
+from arrayproc.io.geometry import line_array
+from arrayproc.stages.cbf import CBF, time_window
+from arrayproc.stages.integrate import Integrate
+
+FS = 5120.0
+N_CH = 64
+NFFT = 2048
+HOP = 1024
+BAND = (100.0, 2000.0)
+BEAMS = {"start": 0.0, "stop": 180.0, "count": 181}
+BLOCK = 8192
+C = 1500.0
+
+
+def source(seconds: float, seed: int = 0):
+    """Time blocks of white noise, cycling over a few pre-drawn blocks (bounded memory)."""
+    rng = np.random.default_rng(seed)
+    pool = [rng.standard_normal((BLOCK, N_CH)).astype(np.float32) for _ in range(4)]
+    pos = line_array(N_CH, 0.36)
+    n_blocks = int(np.ceil(seconds * FS / BLOCK))
+    for k in range(n_blocks):
+        yield Block(pool[k % 4], ("time", "channel"), k * BLOCK / FS, BLOCK / FS, FS, pos, None,
+                    index=k, meta={"n_valid": BLOCK, "sample0": k * BLOCK})
+
+
+def run_stage(seconds: float, integrate: bool = False, threads: int = 0) -> float:
+    """Wall time (s) of the cbf stage (optionally + integrate) over ``seconds`` of data."""
+    cbf = CBF(nfft=NFFT, hop=HOP, window="hann", band=list(BAND), beams=BEAMS,
+              threads=threads)
+    it = cbf.process(source(seconds))
+    if integrate:
+        it = Integrate(snapshots=8, mode="blockwise").process(it)
+    t = time.perf_counter()
+    for _ in it:
+        pass
+    return time.perf_counter() - t
+
+
+def numpy_reference(n_snap: int) -> float:
+    """Seconds per snapshot of the plain per-snapshot numpy CBF."""
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(((n_snap + 1) * HOP, N_CH)).astype(np.float32)
+    pos = line_array(N_CH, 0.36)
+    w = time_window("hann", NFFT).astype(np.float32)
+    f = np.fft.rfftfreq(NFFT, 1 / FS)
+    sel = (f >= BAND[0]) & (f <= BAND[1])
+    cone = np.linspace(BEAMS["start"], BEAMS["stop"], BEAMS["count"])
+    tau = np.cos(np.deg2rad(cone))[:, None] * (pos[:, 0] - pos[:, 0].mean())[None, :] / C
+    steer = np.exp(-2j * np.pi * f[sel, None, None] * tau[None]).astype(np.complex64)
+    t = time.perf_counter()
+    for s in range(n_snap):
+        frame = x[s * HOP:s * HOP + NFFT]
+        spec = np.fft.rfft(frame * w[:, None], axis=0)[sel].astype(np.complex64)
+        np.einsum("fbc,fc->fb", steer, spec)
+    return (time.perf_counter() - t) / n_snap
+
+
+def peak_memory(seconds: float) -> float:
+    """Peak traced memory (MB) while the stage runs over ``seconds`` of data."""
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    run_stage(seconds)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return peak / 1e6
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=60.0, help="data seconds per run")
+    ap.add_argument("--repeat", type=int, default=3, help="runs (best is kept)")
+    ap.add_argument("--ref-snapshots", type=int, default=40)
+    ap.add_argument("--threads", type=int, default=0, help="CBF worker threads (0: all)")
+    ap.add_argument("--json", default=None, help="write the figures to this JSON file")
+    args = ap.parse_args()
+
+    run_stage(5.0, threads=args.threads)  # warm-up: numba cache, FFTW plans, BLAS
+    snaps_per_s = FS / HOP
+    ref_s = []
+    cbf_s = []
+    both_s = []
+    for _ in range(args.repeat):  # interleaved, so both see the same machine load
+        ref_s.append(numpy_reference(args.ref_snapshots))
+        cbf_s.append(run_stage(args.seconds, threads=args.threads))
+        both_s.append(run_stage(args.seconds, integrate=True, threads=args.threads))
+    rt_cbf = args.seconds / min(cbf_s)
+    rt_both = args.seconds / min(both_s)
+    rt_ref = 1.0 / (min(ref_s) * snaps_per_s)
+    mem_short = peak_memory(args.seconds / 4)
+    mem_long = peak_memory(args.seconds)
+    res = {
+        "config": {"channels": N_CH, "fs_hz": FS, "nfft": NFFT, "hop": HOP,
+                   "beams": BEAMS["count"], "band_hz": list(BAND), "bins": 761,
+                   "dtype": "float32", "threads": args.threads or os.cpu_count()},
+        "cbf_x_realtime": rt_cbf,
+        "cbf_integrate_x_realtime": rt_both,
+        "numpy_ref_x_realtime": rt_ref,
+        "ratio_cbf_to_numpy_ref": rt_cbf / rt_ref,
+        "peak_mem_mb": {f"{args.seconds / 4:g}s": mem_short, f"{args.seconds:g}s": mem_long},
+        "load_avg_1min": os.getloadavg()[0],
+        "cpu_count": os.cpu_count(),
+    }
+    print(f"CBF bench: {N_CH} ch, {FS:g} Hz, nfft {NFFT}, hop {HOP}, {BEAMS['count']} beams, "
+          f"{BAND[0]:g}-{BAND[1]:g} Hz, float32, {res['config']['threads']} threads")
+    print(f"{'':24s}{'x real time':>14s}")
+    print(f"{'cbf stage':24s}{rt_cbf:14.1f}")
+    print(f"{'cbf + integrate':24s}{rt_both:14.1f}")
+    print(f"{'numpy per-snapshot ref':24s}{rt_ref:14.2f}")
+    print(f"ratio cbf / numpy ref: {rt_cbf / rt_ref:.1f}")
+    print("peak traced memory: " + ", ".join(f"{k} of data: {v:.0f} MB"
+                                             for k, v in res["peak_mem_mb"].items()))
+    print(f"load average (1 min) at the end: {res['load_avg_1min']:.2f} on "
+          f"{os.cpu_count()} cores")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
