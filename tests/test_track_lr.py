@@ -102,7 +102,9 @@ def test_monte_carlo_is_reproducible_bytewise():
     a = run_case(scn, "ckf", True, 40, 123)
     b = run_case(scn, "ckf", True, 40, 123)
     c = run_case(scn, "ckf", True, 40, 124)
-    assert a.est.tobytes() == b.est.tobytes()
+    d = run_case(scn, "ckf", True, 40, 123, threads=1)
+    e = run_case(scn, "ckf", True, 40, 123, threads=3)
+    assert a.est.tobytes() == b.est.tobytes() == d.est.tobytes() == e.est.tobytes()
     assert a.weights.tobytes() == b.weights.tobytes()
     assert a.est.tobytes() != c.est.tobytes()
 

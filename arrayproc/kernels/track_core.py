@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 MODEL_CV = 0
 MODEL_CT = 1
@@ -620,27 +620,23 @@ def run_track(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q
     return status
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True, nogil=True)
 def run_montecarlo(kind: int, model: int, n_hyp: int, times, zs, own, sigma: float, q1: float,
-                   q2: float, prior, init_draws, U, wm, wc, Upred, wmpred, wcpred, n: int):
-    """:func:`run_track` over independent runs in parallel.
-
-    zs (R, K, n_hyp), init_draws (R, 3). Returns estimates (R, K, 4) (position and velocity
-    of eq. (12)), weights (R, K, n_hyp), final covariance (R, n, n) and status (R,).
-    """
+                   q2: float, prior, init_draws, U, wm, wc, Upred, wmpred, wcpred, n: int,
+                   est, wts, Pfin, status) -> None:
+    """:func:`run_track` over independent runs (rows of ``zs`` (R, K, n_hyp) and
+    ``init_draws`` (R, 3)). Writes estimates ``est`` (R, K, 4) (position and velocity of
+    eq. (12)), weights ``wts`` (R, K, n_hyp), final covariances ``Pfin`` (R, n, n) and
+    ``status`` (R,). Releases the GIL: :mod:`arrayproc.track.montecarlo` runs chunks of runs
+    on several threads (a ``parallel=True`` kernel would take minutes to compile)."""
     R = zs.shape[0]
     K = times.shape[0]
-    est = np.empty((R, K, 4))
-    wts = np.empty((R, K, n_hyp))
-    Pfin = np.empty((R, n, n))
-    status = np.empty(R, dtype=np.int64)
-    for r in prange(R):
-        xs = np.empty((K, n))
-        Ps = np.empty((K, n, n))
-        ws = np.empty((K, n_hyp))
+    xs = np.empty((K, n))
+    Ps = np.empty((K, n, n))
+    ws = np.empty((K, n_hyp))
+    for r in range(R):
         status[r] = run_track(kind, model, n_hyp, times, zs[r], own, sigma, q1, q2, prior,
                               init_draws[r], U, wm, wc, Upred, wmpred, wcpred, xs, Ps, ws)
         est[r] = xs[:, :4]
         wts[r] = ws
         Pfin[r] = Ps[K - 1]
-    return est, wts, Pfin, status

@@ -15,7 +15,9 @@ the truth); the filters still carry the paper's q̄1, q̄2.
 from __future__ import annotations
 
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -185,9 +187,11 @@ class MCResult:
 
 def run_case(scn: LRScenario, filter_name: str, resolved: bool, runs: int, seed: int,
              filter_params: dict | None = None,
-             meas: tuple[np.ndarray, ...] | None = None) -> MCResult:
+             meas: tuple[np.ndarray, ...] | None = None,
+             threads: int | None = None) -> MCResult:
     """Run ``runs`` Monte Carlo runs of one filter, known side (one filter on y¹) or resolved
-    (the two-hypothesis scheme on y¹, y², eqs. (9)-(13))."""
+    (the two-hypothesis scheme on y¹, y², eqs. (9)-(13)), on ``threads`` threads (default:
+    the number of usable cores). The result does not depend on the number of threads."""
     g = scn.geometry()
     model = make_model(scn.model_name)
     filt = make_filter(filter_name, model, scn.sigma_deg, **(filter_params or {}))
@@ -198,9 +202,9 @@ def run_case(scn: LRScenario, filter_name: str, resolved: bool, runs: int, seed:
     prior = scn.prior.as_array()
     prior[4] = math.radians(scn.sigma_deg)
     t0 = time.perf_counter()
-    est, wts, _, status = kc.run_montecarlo(kind, model.code, zs.shape[2], g["times"], zs,
-                                            g["own"], filt.sigma, model.q1, model.q2, prior,
-                                            draws, U, wm, wc, Up, wmp, wcp, model.dim)
+    est, wts, status = _run_threads(kind, model.code, zs, g["times"], g["own"], filt.sigma,
+                                    model.q1, model.q2, prior, np.ascontiguousarray(draws),
+                                    (U, wm, wc, Up, wmp, wcp), model.dim, threads)
     seconds = time.perf_counter() - t0
     truth = rel[..., :4]
     err = est - truth
@@ -217,6 +221,40 @@ def run_case(scn: LRScenario, filter_name: str, resolved: bool, runs: int, seed:
         rmse_pos = rmse_vel = bias = np.full(truth.shape[1], np.nan)
     return MCResult(filter_name, scn.case, resolved, est, wts, status, lost, rmse_pos, rmse_vel,
                     bias, seconds)
+
+
+def default_threads() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover
+        return max(1, os.cpu_count() or 1)
+
+
+def _run_threads(kind, model_code, zs, times, own, sigma, q1, q2, prior, draws, pts, n,
+                 threads):
+    """Split the runs into contiguous chunks and run the GIL-free kernel on a thread pool."""
+    R, K, n_hyp = zs.shape
+    est = np.empty((R, K, 4))
+    wts = np.empty((R, K, n_hyp))
+    Pfin = np.empty((R, n, n))
+    status = np.empty(R, dtype=np.int64)
+    nthr = max(1, min(threads or default_threads(), R))
+    bounds = np.linspace(0, R, 4 * nthr + 1 if R >= 4 * nthr else nthr + 1).astype(int)
+
+    def work(i):
+        a, b = bounds[i], bounds[i + 1]
+        if b > a:
+            kc.run_montecarlo(kind, model_code, n_hyp, times, zs[a:b], own, sigma, q1, q2,
+                              prior, draws[a:b], *pts, n, est[a:b], wts[a:b], Pfin[a:b],
+                              status[a:b])
+
+    if nthr == 1:
+        for i in range(len(bounds) - 1):
+            work(i)
+    else:
+        with ThreadPoolExecutor(nthr) as ex:
+            list(ex.map(work, range(len(bounds) - 1)))
+    return est, wts, status
 
 
 def warm_up(filter_names: list[str], filter_params: dict | None = None) -> None:
