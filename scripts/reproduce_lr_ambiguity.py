@@ -140,6 +140,7 @@ def main(argv: list[str] | None = None) -> int:
                 "diverged_runs": known.n_diverged + res.n_diverged,
                 "paper_track_loss_pct_known_side": PAPER[case][name][0],
                 "paper_track_loss_pct_resolved": PAPER[case][name][1],
+                "paper_relative_time_known_side": PAPER[case][name][2],
                 "paper_relative_time_resolved": PAPER[case][name][3],
             }
             curves[case]["rmse"][name] = (res.rmse_pos, res.rmse_vel)

@@ -357,3 +357,16 @@ def test_log_phi_plus_u_phi_by_quadrature(u):
                          epsrel=1e-13, limit=400, points=[min(1.0, 3 / max(abs(u), 1e-9))])[0]
     ref = math.log(val) - 0.5 * u * u - 0.5 * math.log(2 * math.pi)
     assert kc._log_phi_plus_u_Phi(u) == pytest.approx(ref, rel=1e-11, abs=1e-11)
+
+
+@pytest.mark.parametrize("case", [1, 2])
+def test_scenario_truth_follows_the_filter_models(case):
+    """The section-V truth (built with kinematics.Trajectory) obeys eq. (1) with eqs. (2)-(3)
+    (Case I) or eq. (5) (Case II) exactly: the relative model and the trajectories agree."""
+    from arrayproc.track.montecarlo import LRScenario
+    scn = LRScenario(case=case)
+    g = scn.geometry()
+    m = constant_velocity() if case == 1 else constant_turn()
+    for k in range(1, g["times"].size):
+        pred = m.transition(g["rel"][k - 1], 60.0, g["own"][k - 1], g["own"][k])
+        np.testing.assert_allclose(pred, g["rel"][k], rtol=1e-9, atol=1e-7)
