@@ -167,3 +167,27 @@ def test_propagation_is_linear_in_the_source_signal(a, b, seed):
     lhs = run(a * s1 + b * s2)
     rhs = a * run(s1) + b * run(s2)
     np.testing.assert_allclose(lhs, rhs, atol=1e-6 * (1 + abs(a) + abs(b)) * 0.02)
+
+
+def test_trajectory_kernel_matches_kinematics():
+    """Numba closed-form evaluation vs arrayproc.kinematics.Trajectory.state (numpy)."""
+    from arrayproc.kinematics import Trajectory
+    from arrayproc.sim.motion import TrackMover
+    traj = Trajectory.from_legs([100.0, -50.0], [
+        {"course": 140.0, "speed": 2.57, "duration": 780.0},
+        {"course": 20.0, "speed": 2.57, "duration": 1020.0, "turn_rate": 0.5},
+        {"course": 300.0, "speed": 4.0, "duration": 100.0},
+        {"course": 330.0, "speed": 1.0, "duration": 200.0, "turn_rate": 2.0, "turn": "port"}])
+    t = np.concatenate([np.linspace(-50, 2300, 5001), [0.0, 780.0, 1020.0, 1800.0, 1900.0]])
+    m = TrackMover(traj, 7.0)
+    pos, vel, acc, crs, _ = m.evaluate(t)
+    p_ref, v_ref, c_ref = traj.state(t)
+    np.testing.assert_allclose(pos[:, :2], p_ref, atol=1e-6)
+    np.testing.assert_allclose(vel[:, :2], v_ref, atol=1e-9)
+    assert np.max(np.abs((crs - c_ref + 180) % 360 - 180)) < 1e-9
+    assert np.all(pos[:, 2] == 7.0)
+    # acceleration = d(velocity)/dt (central differences away from segment boundaries)
+    h = 1e-3
+    tt = np.array([100.0, 900.0, 1500.0, 1950.0, 2050.0])
+    dv = (m.state3(tt + h)[1] - m.state3(tt - h)[1]) / (2 * h)
+    np.testing.assert_allclose(m.state3(tt)[2], dv, atol=1e-6)

@@ -10,18 +10,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernels.simtraj import evaluate
 from ..kinematics import Trajectory
 
 
-def _turn_rate(traj: Trajectory, t: np.ndarray) -> np.ndarray:
-    """Turn rate (rad/s) of the segment active at each time (0 before/after the segments)."""
-    if not traj.segments:
-        return np.zeros(t.shape)
-    tb = traj.t0 + np.concatenate([[0.0], np.cumsum([s.duration for s in traj.segments])])
-    seg = np.searchsorted(tb, t, side="right") - 1
-    rates = np.array([np.deg2rad(s.turn_rate) for s in traj.segments] + [0.0])
-    # before t0 the first segment is extended backwards with its own turn rate
-    return rates[np.clip(seg, 0, len(traj.segments))]
+def segment_table(traj: Trajectory) -> tuple[np.ndarray, ...]:
+    """(tb, p0, c0, v, w) of a trajectory for :func:`arrayproc.kernels.simtraj.evaluate`:
+    each segment's start time, position, course (after any instant jump), speed, turn rate,
+    plus a final holding row (straight on at the last speed)."""
+    segs = traj.segments
+    tb = traj.t0 + np.concatenate([[0.0], np.cumsum([s.duration for s in segs])])
+    p, _, c = traj.state(tb)  # state at a boundary = start of the following segment
+    v = np.array([s.speed for s in segs] + [segs[-1].speed if segs else 0.0])
+    w = np.array([s.turn_rate for s in segs] + [0.0])
+    return (np.ascontiguousarray(tb), np.ascontiguousarray(p), np.ascontiguousarray(c), v, w)
 
 
 class TrackMover:
@@ -31,27 +33,30 @@ class TrackMover:
         self.traj = traj
         self.depth = float(depth)
         self.lead = float(lead)  # s: the point is where the track is ``lead`` s later
+        self._tab = segment_table(traj)
 
-    def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        t = np.atleast_1d(np.asarray(t, dtype=float)) + self.lead
-        p2, v2, crs = self.traj.state(t)
-        w = _turn_rate(self.traj, t)
-        c = np.deg2rad(crs)
-        spd = np.hypot(v2[:, 0], v2[:, 1])
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        """pos, vel, acc (n, 3), course (n,) deg, turn rate (n,) rad/s at times t."""
+        t = np.ascontiguousarray(np.atleast_1d(np.asarray(t, dtype=float)) + self.lead)
         n = t.size
+        p2, v2, a2 = np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2))
+        crs, rate = np.empty(n), np.empty(n)
+        evaluate(t, *self._tab, p2, v2, a2, crs, rate)
         pos = np.empty((n, 3))
-        vel = np.zeros((n, 3))
-        acc = np.zeros((n, 3))
         pos[:, :2] = p2
         pos[:, 2] = self.depth
+        vel = np.zeros((n, 3))
         vel[:, :2] = v2
-        acc[:, 0] = spd * w * np.cos(c)
-        acc[:, 1] = -spd * w * np.sin(c)
-        return pos, vel, acc
+        acc = np.zeros((n, 3))
+        acc[:, :2] = a2
+        return pos, vel, acc, crs, rate
+
+    def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.evaluate(t)[:3]
 
     def course(self, t: np.ndarray) -> np.ndarray:
         """Course (deg true) at times t."""
-        return self.traj.state(np.atleast_1d(np.asarray(t, float)) + self.lead)[2]
+        return self.evaluate(t)[3]
 
 
 class FixedMover:
@@ -77,10 +82,8 @@ class BodyOffsetMover:
         self.offset = np.asarray(offset, dtype=float).reshape(3)
 
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        p, v, a = self.own.state3(t)
-        h = np.deg2rad(self.own.course(t))
-        w = _turn_rate(self.own.traj, t + self.own.lead)
+        p, v, a, crs, w = self.own.evaluate(t)
+        h = np.deg2rad(crs)
         bx, by, bz = self.offset
         s, c = np.sin(h), np.cos(h)
         ox = bx * s + by * c  # body_to_world rotation

@@ -107,8 +107,8 @@ class Simulator:
     # -- pose ------------------------------------------------------------------------------
     def pose(self, t: np.ndarray) -> Pose:
         """The array's pose at times t (s)."""
-        p, _, _ = self.own.state3(t)
-        h = np.deg2rad(self.own.course(t))
+        p, _, _, crs, _ = self.own.evaluate(t)
+        h = np.deg2rad(crs)
         idx = np.clip((t / self.s.array.lateral_snapshot).astype(np.int64), 0, self.n_snap - 1)
         return Pose(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
                     np.sin(h), np.cos(h), np.ascontiguousarray(self.lateral_offsets[idx]))
