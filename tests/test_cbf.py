@@ -203,18 +203,13 @@ def test_complex_baseband_input_equals_real_path(rng):
 
 # -- kernels against numpy references ------------------------------------------------------------
 def test_kernels_against_numpy(rng):
-    s_n, n_ch, nfft, nb = 3, 5, 16, 7
-    frames = rng.standard_normal((s_n, nfft, n_ch)).astype(np.float32)
-    win = rng.uniform(0.5, 1, nfft).astype(np.float32)
-    out = np.zeros((s_n + 2, n_ch, nfft), np.float32)
-    kb.window_transpose(frames, win, out)
-    assert np.allclose(out[:s_n], (frames * win[None, :, None]).transpose(0, 2, 1))
-    spec = (rng.standard_normal((s_n, n_ch, 9)) + 1j * rng.standard_normal((s_n, n_ch, 9)))
+    s_n, n_ch, nb = 3, 5, 7
+    spec = (rng.standard_normal((s_n, 9, n_ch)) + 1j * rng.standard_normal((s_n, 9, n_ch)))
     spec = spec.astype(np.complex64)
     x2 = np.empty((4, 2 * s_n, n_ch), np.float32)
     kb.pack_bins(spec, 2, x2)
-    assert np.array_equal(x2[:, :s_n], spec[:, :, 2:6].real.transpose(2, 0, 1))
-    assert np.array_equal(x2[:, s_n:], spec[:, :, 2:6].imag.transpose(2, 0, 1))
+    assert np.array_equal(x2[:, :s_n], spec[:, 2:6].real.transpose(1, 0, 2))
+    assert np.array_equal(x2[:, s_n:], spec[:, 2:6].imag.transpose(1, 0, 2))
     freqs = np.array([10.0, 20.0, 35.0, 40.0])
     delays = rng.uniform(-1e-3, 1e-3, (4, n_ch))
     weights = rng.uniform(0.5, 1.5, n_ch)
@@ -229,7 +224,7 @@ def test_kernels_against_numpy(rng):
     z = np.matmul(x2, g)
     y = np.zeros((s_n, 6, nb), np.complex64)
     kb.unpack_beams(z, uidx, sign, y, 1)
-    xc = spec[:, :, 2:6].transpose(2, 0, 1)  # (nf, S, C)
+    xc = spec[:, 2:6].transpose(1, 0, 2)  # (nf, S, C)
     wc = ref[:, :, uidx]  # (nf, C, B)
     wc[:, :, sign < 0] = np.conj(wc[:, :, sign < 0])
     want = np.einsum("fsc,fcb->sfb", xc, wc)
@@ -333,14 +328,14 @@ def test_folded_fast_path_equals_general_path(rng, monkeypatch, n_h, shading):
 
 def test_fold_kernels_against_numpy(rng):
     s_n, n_ch, nf = 3, 5, 4
-    spec = (rng.standard_normal((s_n, n_ch, 8)) + 1j * rng.standard_normal((s_n, n_ch, 8)))
+    spec = (rng.standard_normal((s_n, 8, n_ch)) + 1j * rng.standard_normal((s_n, 8, n_ch)))
     spec = spec.astype(np.complex64)
     pi = np.array([0, 1, 2], np.int64)
     pj = np.array([4, 3, 2], np.int64)  # element 2 is the centre
     xs = np.empty((nf, 2 * s_n, 3), np.float32)
     xd = np.empty((nf, 2 * s_n, 3), np.float32)
     kb.pack_fold(spec, 1, pi, pj, xs, xd)
-    x = spec[:, :, 1:5].transpose(2, 0, 1)  # (nf, S, C)
+    x = spec[:, 1:5].transpose(1, 0, 2)  # (nf, S, C)
     ssum = x[:, :, pi] + np.where(pi == pj, 0, 1) * x[:, :, pj]
     sdif = np.where(pi == pj, 0, 1) * (x[:, :, pi] - x[:, :, pj])
     assert np.allclose(xs[:, :s_n], ssum.real) and np.allclose(xs[:, s_n:], ssum.imag)
@@ -355,11 +350,13 @@ def test_fold_kernels_against_numpy(rng):
     assert np.allclose(gc, w[None, :, None] * np.cos(ph), atol=1e-6)
     assert np.allclose(gs, w[None, :, None] * np.sin(ph), atol=1e-6)
     za, zb = np.matmul(xs, gc), np.matmul(xd, gs)
-    uidx = np.array([0, 1, 0, 1], np.int64)
+    uidx = np.array([0, 1, 1, 0], np.int64)
     sign = np.array([1, 1, -1, -1], np.float32)
+    runs = kb.beam_runs(uidx, sign)
+    assert runs.tolist() == [[0, 2, 0, 1, 1], [2, 2, 1, -1, -1]]
     y = np.zeros((s_n, nf, 4), np.complex64)
-    kb.unpack_fold(za, zb, uidx, sign, y, 0)
+    kb.unpack_fold(za, zb, runs, y, 0)
     a = np.einsum("fsk,fku->fsu", ssum, gc)
     b = np.einsum("fsk,fku->fsu", sdif, gs)
-    want = np.concatenate([a - 1j * b, a + 1j * b], axis=2).transpose(1, 0, 2)
+    want = np.concatenate([a - 1j * b, (a + 1j * b)[:, :, ::-1]], axis=2).transpose(1, 0, 2)
     assert np.allclose(y, want, atol=1e-4)

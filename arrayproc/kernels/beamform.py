@@ -27,29 +27,15 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def window_transpose(frames: np.ndarray, win: np.ndarray, out: np.ndarray) -> None:
-    """``out[s, c, k] = win[k] · frames[s, k, c]``: taper the frames (S, nfft, C) and lay each
-    channel's samples contiguously for the FFT. ``out`` has at least S rows."""
-    ns, nk, nc = frames.shape
-    tile = 32  # transpose in tiles so both sides stay in cache
-    for s in range(ns):
-        for k0 in range(0, nk, tile):
-            k1 = min(nk, k0 + tile)
-            for c in range(nc):
-                for k in range(k0, k1):
-                    out[s, c, k] = win[k] * frames[s, k, c]
-
-
-@njit(cache=True, nogil=True)
 def pack_bins(spec: np.ndarray, first_bin: int, out: np.ndarray) -> None:
-    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (S, C, F) complex into
+    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (S, F, C) complex into
     ``out`` (nf, 2S, C) float32: rows 0..S-1 the real parts, rows S..2S-1 the imaginary."""
     nf, s2, nc = out.shape
     ns = s2 // 2
-    for s in range(ns):
-        for c in range(nc):
-            for f in range(nf):
-                v = spec[s, c, first_bin + f]
+    for f in range(nf):
+        for s in range(ns):
+            for c in range(nc):
+                v = spec[s, first_bin + f, c]
                 out[f, s, c] = v.real
                 out[f, ns + s, c] = v.imag
 
@@ -143,22 +129,23 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
 def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
               out_s: np.ndarray, out_d: np.ndarray) -> None:
     """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of
-    ``spec`` (S, C, F): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
+    ``spec`` (S, F, C): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
     in rows S..2S-1. A centre element (pi == pj) gives S = X, D = 0."""
     nf, s2, nk = out_s.shape
     ns = s2 // 2
-    for s in range(ns):
-        for k in range(nk):
-            i, j = pi[k], pj[k]
-            for f in range(nf):
-                a = spec[s, i, first_bin + f]
+    for f in range(nf):
+        for s in range(ns):
+            row = spec[s, first_bin + f]
+            for k in range(nk):
+                i, j = pi[k], pj[k]
+                a = row[i]
                 if i == j:
                     out_s[f, s, k] = a.real
                     out_s[f, ns + s, k] = a.imag
                     out_d[f, s, k] = 0.0
                     out_d[f, ns + s, k] = 0.0
                 else:
-                    b = spec[s, j, first_bin + f]
+                    b = row[j]
                     out_s[f, s, k] = a.real + b.real
                     out_s[f, ns + s, k] = a.imag + b.imag
                     out_d[f, s, k] = a.real - b.real
@@ -181,21 +168,51 @@ def steering_fold(freqs: np.ndarray, delays: np.ndarray, weights: np.ndarray,
                 out_s[f, k, u] = weights[k] * math.sin(ph)
 
 
+def beam_runs(uidx: np.ndarray, sign: np.ndarray) -> np.ndarray:
+    """Compress the beam → (direction, sign) map into linear runs ``(b0, n, u0, du, sign)``
+    (int64 rows; sign ±1) so the unpack loops run over contiguous indices. A symmetric fan
+    0..180° is two runs: beams up to 90° forwards, the rest backwards."""
+    runs = []
+    b = 0
+    nb = len(uidx)
+    while b < nb:
+        n = 1
+        du = int(uidx[b + 1] - uidx[b]) if b + 1 < nb else 1
+        if du not in (1, -1):
+            du = 1
+        while (b + n < nb and sign[b + n] == sign[b]
+               and uidx[b + n] == uidx[b] + n * du):
+            n += 1
+        runs.append((b, n, int(uidx[b]), du, int(sign[b])))
+        b += n
+    return np.array(runs, np.int64).reshape(-1, 5)
+
+
 @njit(cache=True, nogil=True)
-def unpack_fold(za: np.ndarray, zb: np.ndarray, uidx: np.ndarray, sign: np.ndarray,
-                y: np.ndarray, f_off: int) -> None:
+def unpack_fold(za: np.ndarray, zb: np.ndarray, runs: np.ndarray, y: np.ndarray,
+                f_off: int) -> None:
     """Beams from the folded GEMMs ``za`` = [Sr; Si]·C and ``zb`` = [Dr; Di]·S, (nf, 2S, U):
-    Y(+u) = A − jB = (Ar + Bi) + j(Ai − Br), Y(−u) = A + jB, into y (S, F, B) complex64."""
+    Y(+u) = A − jB = (Ar + Bi) + j(Ai − Br), Y(−u) = A + jB, into y (S, F, B) complex64;
+    ``runs`` from :func:`beam_runs`."""
     nf = za.shape[0]
     ns = za.shape[1] // 2
-    nb = uidx.shape[0]
+    yr = y.view(np.float32)
     for f in range(nf):
         for s in range(ns):
-            for b in range(nb):
-                u = uidx[b]
-                sg = sign[b]
-                ar = za[f, s, u]
-                ai = za[f, ns + s, u]
-                br = zb[f, s, u]
-                bi = zb[f, ns + s, u]
-                y[s, f_off + f, b] = complex(ar + sg * bi, ai - sg * br)
+            out = yr[s, f_off + f]
+            ar = za[f, s]
+            ai = za[f, ns + s]
+            br = zb[f, s]
+            bi = zb[f, ns + s]
+            for r in range(runs.shape[0]):
+                b0, n, u0, du, sg = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
+                if sg > 0:
+                    for m in range(n):
+                        u = u0 + m * du
+                        out[2 * (b0 + m)] = ar[u] + bi[u]
+                        out[2 * (b0 + m) + 1] = ai[u] - br[u]
+                else:
+                    for m in range(n):
+                        u = u0 + m * du
+                        out[2 * (b0 + m)] = ar[u] - bi[u]
+                        out[2 * (b0 + m) + 1] = ai[u] + br[u]
