@@ -13,8 +13,9 @@ Printed (and written with ``--json``):
   steering matrix; numpy's default complex128, and a complex64 variant), measured in the
   same process on ``--ref-snapshots`` snapshots, interleaved with the stage's runs;
 - the ratio of the two;
-- peak traced memory (tracemalloc: numpy allocations included) of the stage over two data
-  lengths, to show it does not grow with the length of the input.
+- peak traced memory (tracemalloc: numpy allocations included) of a fresh stage over two data
+  lengths, and the peak RSS of a fresh process over 1/4 and 4 times ``--seconds``, to show
+  memory does not grow with the length of the input.
 
 The 1-minute load average is printed with the results: the machine is shared.
 
@@ -109,13 +110,25 @@ def numpy_reference(n_snap: int, single: bool = False) -> float:
 
 
 def peak_memory(seconds: float) -> float:
-    """Peak traced memory (MB) while the stage runs over ``seconds`` of data."""
+    """Peak traced memory (MB: numpy and Python allocations) of a fresh stage running over
+    ``seconds`` of data, set-up (steering matrix, FFT buffers) included."""
+    _STAGES.clear()
     tracemalloc.start()
     tracemalloc.reset_peak()
     run_stage(seconds)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     return peak / 1e6
+
+
+def peak_rss_child(seconds: float) -> float:
+    """Peak resident set size (MB) of a fresh Python process running the stage over
+    ``seconds`` of data (everything: interpreter, libraries, buffers)."""
+    import subprocess
+    import sys
+    out = subprocess.run([sys.executable, __file__, "--rss-child", str(seconds)],
+                         capture_output=True, text=True, check=True)
+    return float(out.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
@@ -125,7 +138,13 @@ def main() -> None:
     ap.add_argument("--ref-snapshots", type=int, default=40)
     ap.add_argument("--threads", type=int, default=0, help="CBF worker threads (0: all)")
     ap.add_argument("--json", default=None, help="write the figures to this JSON file")
+    ap.add_argument("--rss-child", type=float, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.rss_child is not None:
+        import resource
+        run_stage(args.rss_child)
+        print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0)
+        return
 
     t = time.perf_counter()
     run_stage(5.0, threads=args.threads)  # warm-up: numba cache, FFTW plans, steering
@@ -144,8 +163,9 @@ def main() -> None:
     rt_both = args.seconds / min(both_s)
     rt_ref = 1.0 / (min(ref_s) * snaps_per_s)
     rt_ref32 = 1.0 / (min(ref32_s) * snaps_per_s)
-    mem_short = peak_memory(args.seconds / 4)
-    mem_long = peak_memory(args.seconds)
+    mem_short = peak_memory(args.seconds / 2)
+    mem_long = peak_memory(args.seconds * 2)
+    rss = {f"{sec:g}s": peak_rss_child(sec) for sec in (args.seconds / 4, args.seconds * 4)}
     res = {
         "config": {"channels": N_CH, "fs_hz": FS, "nfft": NFFT, "hop": HOP,
                    "beams": BEAMS["count"], "band_hz": list(BAND), "bins": 761,
@@ -156,7 +176,9 @@ def main() -> None:
         "ratio_cbf_to_numpy_ref": rt_cbf / rt_ref,
         "numpy_ref_complex64_x_realtime": rt_ref32,
         "ratio_cbf_to_numpy_ref_complex64": rt_cbf / rt_ref32,
-        "peak_mem_mb": {f"{args.seconds / 4:g}s": mem_short, f"{args.seconds:g}s": mem_long},
+        "peak_traced_mb": {f"{args.seconds / 2:g}s": mem_short,
+                           f"{args.seconds * 2:g}s": mem_long},
+        "peak_rss_mb": rss,
         "first_run_5s_wall_s": setup,
         "load_avg_1min": os.getloadavg()[0],
         "cpu_count": os.cpu_count(),
@@ -169,8 +191,10 @@ def main() -> None:
     print(f"{'numpy per-snapshot ref':24s}{rt_ref:14.2f}")
     print(f"{'  same, complex64':24s}{rt_ref32:14.2f}")
     print(f"ratio cbf / numpy ref: {rt_cbf / rt_ref:.1f} (complex64 ref: {rt_cbf / rt_ref32:.1f})")
-    print("peak traced memory: " + ", ".join(f"{k} of data: {v:.0f} MB"
-                                             for k, v in res["peak_mem_mb"].items()))
+    print("peak traced memory (fresh stage): " + ", ".join(
+        f"{k} of data: {v:.0f} MB" for k, v in res["peak_traced_mb"].items()))
+    print("peak RSS of a fresh process: " + ", ".join(
+        f"{k} of data: {v:.0f} MB" for k, v in res["peak_rss_mb"].items()))
     print(f"load average (1 min) at the end: {res['load_avg_1min']:.2f} on "
           f"{os.cpu_count()} cores")
     if args.json:
