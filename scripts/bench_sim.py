@@ -104,10 +104,12 @@ def main() -> None:
     sim = Simulator(scen)
     sim.render(0, 2048)  # compile / warm caches
     n = sim.n_samples
-    t0 = time.perf_counter()
+    load0 = os.getloadavg()[0]
+    t0, c0 = time.perf_counter(), time.process_time()
     for k in range(0, n, scen.chunk):
         sim.render(k, min(n, k + scen.chunk))
     t_render = time.perf_counter() - t0
+    cpu_render = time.process_time() - c0
 
     with tempfile.TemporaryDirectory() as d:
         t0 = time.perf_counter()
@@ -131,6 +133,7 @@ def main() -> None:
         "channels": sim.n_channels, "fs": sim.fs, "duration_s": args.duration,
         "threads": numba.get_num_threads(), "cpu_count": os.cpu_count(),
         "render_s": t_render, "realtime_factor_render": args.duration / t_render,
+        "render_cpu_s": cpu_render, "load_average_1min": load0,
         "file_s": t_file, "realtime_factor_file": args.duration / t_file,
         "propagation_numba_s_per_s": t_numba, "propagation_numpy_s_per_s": t_numpy,
         "numba_speedup_vs_numpy": t_numpy / t_numba, "numba_numpy_max_rel_diff": agree,
@@ -138,8 +141,11 @@ def main() -> None:
     print(f"simulator benchmark: {sim.n_channels} ch, {sim.fs:g} Hz, 2 moving sources "
           f"(3 tonals + broadband each), noise, {args.duration:g} s, "
           f"{rows['threads']} numba threads")
+    print(f"machine load average at start: {load0:.1f} on {os.cpu_count()} cores")
     print(f"{'what':<44}{'wall s':>10}{'x real time':>14}")
     print(f"{'render (chunks, in memory)':<44}{t_render:>10.2f}{args.duration / t_render:>14.1f}")
+    print(f"{'  same, CPU time of the process':<44}{cpu_render:>10.2f}"
+          f"{args.duration / cpu_render:>14.1f}")
     print(f"{'simulate to HDF5 (incl. truth, nav)':<44}{t_file:>10.2f}"
           f"{args.duration / t_file:>14.1f}")
     print(f"{'propagation 1 s, numba':<44}{t_numba:>10.3f}{1 / t_numba:>14.1f}")
