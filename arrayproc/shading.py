@@ -12,6 +12,8 @@ N_H (thesis eq. 2.14).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.signal import windows
 
@@ -77,7 +79,9 @@ def shading_weights(kind: str, positions: np.ndarray, sidelobe_db: float = 30.0,
     elif kind == "chebyshev":
         order = np.argsort(_axis_coordinates(positions), kind="stable")
         w = np.empty(n)
-        w[order] = windows.chebwin(n, abs(sidelobe_db))
+        with warnings.catch_warnings():  # scipy warns about spectral-analysis use below 45 dB
+            warnings.simplefilter("ignore", UserWarning)
+            w[order] = windows.chebwin(n, abs(sidelobe_db))
     else:
         raise ConfigError(f"shading: unknown kind {kind!r} (known: {', '.join(KINDS)})")
     return w / w.mean()
