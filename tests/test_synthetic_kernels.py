@@ -23,7 +23,7 @@ def ref_combine(beams, phase, disp, freqs, u, c):
 
 def ref_etam(xa, xb, shift, q):
     n_f, n_c = xa.shape
-    a, b = xa[:, shift:], xb[:, : n_c - shift]
+    a, b = xa[:, : n_c - shift], xb[:, shift:]
     out = np.empty(n_f)
     for f in range(n_f):
         lo, hi = max(0, f - q // 2), min(n_f, f + q // 2 + 1)
@@ -88,12 +88,13 @@ def test_etam_phase_recovers_a_common_phase_jump():
     """Shared elements see the same field; a phase jump ψ of the later snapshot comes back."""
     rng = np.random.default_rng(3)
     n_f, n_c, shift = 50, 32, 16
-    field = cgauss(rng, (n_f, n_c + shift))  # the field at points 0 .. n_c + shift − 1
+    field = cgauss(rng, (n_f, n_c + shift))  # the field at points 0 .. n_c + shift − 1, fore → aft
     psi = rng.uniform(-np.pi, np.pi, n_f)
-    # Snapshot b's element n sits at point n; snapshot b+1 moved `shift` points on, so its
-    # element n sits at point n + shift (with a phase jump −ψ), where b's element n + shift was.
-    xa = field[:, :n_c]
-    xb = field[:, shift:shift + n_c] * np.exp(-1j * psi)[:, None]
+    # Snapshot b's element n sits at point n + shift; snapshot b+1 moved `shift` points forward,
+    # so its element n sits at point n, and its element n + shift where b's element n was; it
+    # is seen with a phase jump −ψ.
+    xa = field[:, shift:shift + n_c]
+    xb = field[:, :n_c] * np.exp(-1j * psi)[:, None]
     out = np.empty(n_f)
     ks.etam_phase(xa, xb, shift, 5, out)
     assert np.allclose(np.angle(np.exp(1j * (out - psi))), 0.0, atol=1e-9)

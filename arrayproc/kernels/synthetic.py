@@ -102,14 +102,16 @@ def combine_subapertures(beams: np.ndarray, phase: np.ndarray, disp: np.ndarray,
 def etam_phase(xa: np.ndarray, xb: np.ndarray, shift: int, q: int, out: np.ndarray) -> None:
     """ETAM phase correction between successive snapshots, thesis eqs. (2.53)-(2.54).
 
-    ``xa`` (F, C) spectra of snapshot b, ``xb`` of snapshot b+1 (elements fore → aft); the
-    array moved ``shift`` elements forward, so element n + shift of b and element n of b+1
-    sampled the same point. For each bin l,
+    ``xa`` (F, C) spectra of snapshot b, ``xb`` of snapshot b+1, elements ordered fore → aft.
+    Between the two the array moved ``shift`` elements forward, so element n + shift of b+1
+    sits where element n of b was: b's forward elements and b+1's aft elements overlap. For
+    each bin l,
 
-        Ψ_b(f_l) = arg( Σ_n ρ_n(f_l) Ξ_{b,n+shift}(f_l) Ξ*_{b+1,n}(f_l) / Σ_n ρ_n(f_l) ),
+        Ψ_b(f_l) = arg( Σ_n ρ_n(f_l) Ξ_{b,n}(f_l) Ξ*_{b+1,n+shift}(f_l) / Σ_n ρ_n(f_l) ),
 
-    with ρ_n the coherence of the pair over the ``q`` bins centred on l (eq. 2.54; ``q`` odd,
-    truncated at the band edges). Multiplying snapshot b+1 by exp(jΨ_b) aligns its phase with
+    with ρ_n the coherence of the pair over the ``q`` bins centred on l (eq. 2.54, truncated
+    at the band edges). (The thesis writes the pair as Ξ_{b,N_H/2+n} Ξ*_{b+1,n}, numbering the
+    elements the other way round.) Multiplying snapshot b+1 by exp(jΨ_b) aligns its phase with
     snapshot b. ``out`` (F,) float64.
     """
     n_f, n_c = xa.shape
@@ -121,8 +123,8 @@ def etam_phase(xa: np.ndarray, xb: np.ndarray, shift: int, q: int, out: np.ndarr
     pb = np.zeros((n_f + 1, n_pair))
     for f in range(n_f):
         for n in range(n_pair):
-            a = xa[f, n + shift]
-            b = xb[f, n]
+            a = xa[f, n]
+            b = xb[f, n + shift]
             cs[f + 1, n] = cs[f, n] + a * np.conj(b)
             pa[f + 1, n] = pa[f, n] + a.real * a.real + a.imag * a.imag
             pb[f + 1, n] = pb[f, n] + b.real * b.real + b.imag * b.imag
@@ -133,7 +135,7 @@ def etam_phase(xa: np.ndarray, xb: np.ndarray, shift: int, q: int, out: np.ndarr
         for n in range(n_pair):
             den = np.sqrt((pa[hi, n] - pa[lo, n]) * (pb[hi, n] - pb[lo, n]))
             rho = np.abs(cs[hi, n] - cs[lo, n]) / den if den > 0 else 0.0
-            num += rho * (xa[f, n + shift] * np.conj(xb[f, n]))
+            num += rho * (xa[f, n] * np.conj(xb[f, n + shift]))
         # Dividing by Σρ (> 0) does not change the argument.
         out[f] = np.arctan2(num.imag, num.real)
 

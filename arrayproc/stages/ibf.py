@@ -1,17 +1,18 @@
 """``ibf``: inverse beamforming, the coherent "onion peeler" (thesis 2.2.3.3, after Wilson and
 Nuttall).
 
-Per snapshot and frequency bin: beamform the element spectra, take the loudest beam, refine its
-direction, estimate the plane-wave amplitudes of all waves found so far by least squares on the
-element spectra, subtract the synthetic plane waves from every element, and repeat — up to
-``max_sources`` waves, or until the loudest remaining beam is less than ``stop_db`` above the
-noise estimate. Removing a wave at the elements removes its sidelobes too.
+Per snapshot: beamform the element spectra over the band, take the loudest direction, refine
+it, estimate the plane wave's amplitude and phase in every bin by least squares on the element
+spectra (jointly with the waves found before), subtract the synthetic plane wave from every
+element, and repeat — up to ``max_sources`` waves, or until the loudest remaining beam is less
+than ``stop_db`` above the noise estimate. Removing a wave at the elements removes its
+sidelobes too.
 
 Output: the cleaned element spectra (domain ``("snapshot", "freq", "channel")``, see
 :mod:`arrayproc.snapshots`) for ``etam``/``psas`` downstream, and a products group
-``ibf_removed`` with one row per removed wave: ``time`` (s), ``cone_deg``, ``freq`` (Hz),
-``level_db`` (the wave's level at the elements, dB re 1 µPa rms for a tone centred on the bin,
-data in Pa), ``snr_db`` (beam power over the noise estimate).
+``ibf_removed`` with one row per removed wave and snapshot: ``time`` (s), ``cone_deg``,
+``level_db`` (the wave's in-band mean square at an element, dB re 1 µPa² for data in Pa),
+``snr_db`` (band beam power over the noise estimate), ``freq_lo``, ``freq_hi`` (Hz).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from .. import fft
 from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
+from ..kernels import synthetic as ks
 from ..snapshots import SPECTRA_DOMAIN, SpectraFramer, snapshot_seconds, uniform_line
 
 
@@ -35,185 +37,149 @@ def plane_wave(freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c: float) -> np.
     return np.exp(2j * np.pi * (freqs * u / c)[:, None] * x[None, :])
 
 
-def joint_fit(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, U: np.ndarray,
-              mask: np.ndarray, c: float, iters: int = 4,
-              max_step: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares fit of K plane waves per bin: directions by Gauss-Newton, amplitudes by
-    linear least squares (variable projection).
+def joint_fit(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c: float,
+              iters: int = 4, max_step: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares fit of K plane waves over a band: one direction per wave, one complex
+    amplitude per wave and bin (variable projection, Gauss-Newton on the directions).
 
-    Minimises ||X − Σ_j a_j v(u_j)||² per bin, v(u)_n = exp(+j2π f x_n u / c). ``U`` (F, K)
-    starting direction cosines, ``mask`` (F, K) which waves exist in each bin. Each step solves
-    Re(JᴴJ) Δu = −Re(Jᴴ r) with ∂r/∂u_j = −a_j (j 2π f x / c) ⊙ v_j, the step limited to
-    ``max_step`` beamwidths. Returns ``(U, A)``.
+    Minimises Σ_f ||X_f − Σ_j a_{f,j} v_f(u_j)||², v_f(u)_n = exp(+j2π f x_n u / c). ``u`` (K,)
+    starting direction cosines. Each step solves Σ_f Re(J_fᴴJ_f) Δu = −Σ_f Re(J_fᴴ r_f) with
+    ∂r_f/∂u_j = −a_{f,j} (j 2π f x / c) ⊙ v_f(u_j), the step limited to ``max_step``
+    beamwidths at the band centre. Returns ``(u, A)`` with A (F, K).
     """
     k = 2.0 * np.pi * freqs / c  # (F,)
-    bw = c / (np.maximum(freqs, 1e-12) * np.ptp(x) + 1e-12)  # beamwidth in u
-    U = U.copy()
-    eye = np.eye(U.shape[1], dtype=bool)[None]
-
-    def solve_amplitudes(V: np.ndarray) -> np.ndarray:
+    bw = c / (np.median(freqs) * np.ptp(x) + 1e-12)
+    eye = np.eye(u.size)
+    u = u.astype(float).copy()
+    for it in range(iters + 1):
+        V = np.exp(1j * (k[:, None, None] * x[None, :, None]) * u[None, None, :])  # (F, C, K)
         G = np.einsum("fck,fcl->fkl", V.conj(), V)
-        G[~mask[:, :, None] & eye] = 1.0
+        G += 1e-9 * np.trace(G, axis1=1, axis2=2).real[:, None, None] * eye[None]
         rhs = np.einsum("fck,fc->fk", V.conj(), X)
         A = np.linalg.solve(G, rhs[..., None])[..., 0]
-        A[~mask] = 0.0
-        return A
-
-    for it in range(iters + 1):
-        V = np.exp(1j * (k[:, None, None] * x[None, :, None]) * U[:, None, :])  # (F, C, K)
-        V[np.broadcast_to(~mask[:, None, :], V.shape)] = 0.0
-        A = solve_amplitudes(V)
         if it == iters:
             break
         r = X - np.einsum("fck,fk->fc", V, A)
         J = -(1j * k[:, None, None] * x[None, :, None]) * V * A[:, None, :]
-        H = np.einsum("fck,fcl->fkl", J.conj(), J).real
-        H[~mask[:, :, None] & eye] = 1.0
-        g = np.einsum("fck,fc->fk", J.conj(), r).real
-        with np.errstate(invalid="ignore"):
-            du = -np.linalg.solve(H, g[..., None])[..., 0]
-        du = np.nan_to_num(du)
-        lim = max_step * bw[:, None]
-        U = np.where(mask, np.clip(U + np.clip(du, -lim, lim), -1.0, 1.0), U)
-    return U, A
+        H = np.einsum("fck,fcl->kl", J.conj(), J).real
+        H += 1e-9 * np.trace(H) * eye
+        g = np.einsum("fck,fc->k", J.conj(), r).real
+        du = -np.linalg.solve(H, g)
+        u = np.clip(u + np.clip(np.nan_to_num(du), -max_step * bw, max_step * bw), -1.0, 1.0)
+    return u, A
 
 
 def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: float,
-               max_sources: int = 3, stop_db: float = 12.0,
+               max_sources: int = 3, stop_db: float = 3.0,
                sector: tuple[float, float] | None = None, keep_sources: int = 2,
-               oversample: int = 8, fit_iters: int = 4
-               ) -> tuple[np.ndarray, list[dict[str, np.ndarray]]]:
-    """Remove the loudest plane waves from one snapshot's element spectra.
+               oversample: int = 8, grid: int = 0, fit_iters: int = 4
+               ) -> tuple[np.ndarray, list[dict]]:
+    """Remove the loudest plane waves of a band from one snapshot's element spectra.
 
-    Each round takes the loudest beam of the current residual in every bin, refines its
-    direction, adds that plane wave to the bin's model and re-estimates the amplitudes of all
-    modelled waves jointly by least squares on the element spectra. Waves inside ``sector``
-    (up to ``max_sources`` of them) are removed; other waves found on the way (up to
-    ``keep_sources``, e.g. a target outside the sector) stay in the data but take part in the
-    joint estimate, so their leakage does not bias the removed waves and they lose nothing.
+    Each round beamforms the residual over the band (the sum over bins of the beam powers),
+    takes the loudest direction, refines it, and re-estimates all modelled waves jointly
+    (:func:`joint_fit`: one direction per wave, an amplitude and phase per bin). Waves inside
+    ``sector`` (up to ``max_sources``) are removed from the elements; other waves found on the
+    way (up to ``keep_sources``, e.g. a target outside the sector) stay in the data but take
+    part in the joint estimate, so their leakage does not bias the removed waves and they
+    lose nothing.
 
     Parameters
     ----------
     X : (F, C) complex
         Element spectra, elements ordered fore → aft (body x = ``x``, uniform spacing ``dx``).
     freqs : (F,) Hz.  c : sound speed, m/s.
-    max_sources : waves removed per bin at most.
-    stop_db : a bin stops when its loudest remaining beam is less than ``stop_db`` above the
-        noise estimate (the median beam power of the current residual over the bin's visible
-        region divided by ln 2, the median of an exponential law). The loudest of ~C noise
-        beams exceeds the mean by ln C + … ≈ 6-10 dB, so keep ``stop_db`` above that.
+    max_sources : waves removed at most.
+    stop_db : stop when the loudest remaining band beam power is less than ``stop_db`` above
+        the noise estimate (the median band beam power over the visible directions).
     sector : (lo, hi) cone angles (deg) of the waves to remove, or None for all.
-    keep_sources : waves kept in the joint model but not removed, per bin at most.
-    oversample : the beam scan is a zero-padded spatial FFT of ``oversample``·C points (at
-        least 256), refined by a parabola through the three cells around the peak.
-    fit_iters : Gauss-Newton iterations of the joint direction fit of all modelled waves
-        after each round (:func:`joint_fit`).
+    keep_sources : waves kept in the joint model but not removed, at most.
+    oversample, grid : each bin is scanned by a zero-padded spatial FFT of ``oversample``·C
+        points (at least 256) and the powers interpolated onto ``grid`` directions uniform in
+        cos θ (default 4·C + 1) before summing over the band.
 
     Returns
     -------
-    residual : (F, C) complex, the spectra with the removed waves subtracted.
-    removed : one dict per removed-wave slot with per-bin arrays ``bin`` (indices),
-        ``cone_deg``, ``amp`` (complex amplitude at the elements) and ``snr_db``.
+    residual : (F, C) complex64, the spectra with the removed waves subtracted.
+    removed : one dict per removed wave: ``cone_deg``, ``amp`` (F,) complex amplitudes at the
+        elements, ``snr_db`` (band beam power over the noise estimate).
     """
+    X = np.asarray(X, np.complex128)
     n_f, n_c = X.shape
     n_pad = max(256, int(2 ** np.ceil(np.log2(oversample * n_c))))
-    k = np.fft.fftfreq(n_pad) * n_pad  # signed cell index
-    # Cell k looks towards u = k c / (n_pad f δx) (aliased beyond |u| = 1: grating lobes).
+    n_g = grid or 4 * n_c + 1
+    ug = np.linspace(-1.0, 1.0, n_g)
     fpos = np.maximum(freqs, 1e-12)
-    u_of = k[None, :] * c / (n_pad * fpos[:, None] * dx)
-    visible = np.abs(u_of) <= 1.0
+    # Cell index (fractional) of each grid direction in each bin's scan: k = u n_pad f δx / c.
+    kf = ug[None, :] * (n_pad * fpos * dx / c)[:, None]
+    k0 = np.floor(kf).astype(int)
+    w1 = kf - k0
+    i0, i1 = k0 % n_pad, (k0 + 1) % n_pad
+    rows = np.arange(n_f)[:, None]
     u_lo, u_hi = (-1.0, 1.0) if sector is None else (np.cos(np.deg2rad(sector[1])),
                                                      np.cos(np.deg2rad(sector[0])))
-    rows = np.arange(n_f)
+    bw = c / (np.median(fpos) * n_c * dx)  # beamwidth in u at the band centre
 
-    def scan(R: np.ndarray) -> np.ndarray:
-        # Σ_n R_n exp(+j2π n k / n_pad) = n_pad · ifft: the beam at u_k up to a phase.
-        y = fft.ifft(R, n=n_pad, axis=1) * n_pad
-        return (y.real**2 + y.imag**2) / n_c  # beam power, E = σ² for white noise
+    def band_power(R: np.ndarray) -> np.ndarray:
+        y = fft.ifft(R, n=n_pad, axis=1) * n_pad  # Σ_n R_n exp(+j2π n k / n_pad)
+        p = (y.real**2 + y.imag**2) / n_c
+        return ((1 - w1) * p[rows, i0] + w1 * p[rows, i1]).sum(0)  # (n_g,)
 
-    n_vis = visible.sum(axis=1)
-    # Visible cells first in each row, so a row's median is taken over its visible region.
-    vis_order = np.argsort(~visible, axis=1, kind="stable")
+    y = np.empty(n_f, np.complex128)
 
-    def noise_of(P: np.ndarray) -> np.ndarray:
-        """Median beam power of each bin's visible region / ln 2 (exponential-law mean)."""
-        Ps = np.take_along_axis(P, vis_order, axis=1)
-        out = np.full(n_f, np.nan)
-        for m in np.unique(n_vis[n_vis > 0]):
-            rows_m = n_vis == m
-            out[rows_m] = np.median(Ps[rows_m, :m], axis=1) / np.log(2.0)
-        return out
+    def power_at(R: np.ndarray, u: float) -> float:
+        ks.beam_at(R, freqs, np.full(n_f, u), float(x[0]), dx, c, y)
+        return float((y.real**2 + y.imag**2).sum() / n_c)
 
-    P = scan(X)
-    noise = noise_of(P)
-
-    X = X.astype(np.complex128)
-    kinds: list[np.ndarray] = []  # (F,) True where that wave is to be removed
-    info: list[tuple[np.ndarray, np.ndarray]] = []  # (present, snr_db)
-    us: list[np.ndarray] = []  # (F,) direction cosine of each wave
-    masks: list[np.ndarray] = []  # (F,) where each wave is modelled
-    n_removed = np.zeros(n_f, int)
-    n_kept = np.zeros(n_f, int)
-    active = np.isfinite(noise)
+    us: list[float] = []
+    remove: list[bool] = []
+    snrs: list[float] = []
     A = np.zeros((n_f, 0), np.complex128)
     R = X
+    n_removed = n_kept = 0
     for _ in range(max_sources + keep_sources):
-        if not active.any():
+        B = band_power(R)
+        noise = float(np.median(B))
+        allowed = np.ones(n_g, bool)
+        for uj in us:
+            allowed &= np.abs(ug - uj) > 0.5 * bw
+        if n_kept >= keep_sources:  # only removable waves may still be taken
+            if n_removed >= max_sources:
+                break
+            allowed &= (ug >= u_lo) & (ug <= u_hi)
+        if not allowed.any():
             break
-        if us:
-            P = scan(R)
-            # The noise estimate follows the residual: the sidelobes of removed waves no
-            # longer inflate it.
-            noise = np.fmin(noise, noise_of(P))
-        thresh = noise * 10 ** (stop_db / 10.0)
-        Pm = np.where(visible, P, -np.inf)
-        kk = np.argmax(Pm, axis=1)
-        peak = Pm[rows, kk]
-        go = active & (peak > thresh)
-        if not go.any():
+        g = int(np.argmax(np.where(allowed, B, -np.inf)))
+        if not B[g] > noise * 10 ** (stop_db / 10.0):
             break
-        # Parabolic refinement in the cell index (on the log power, neighbours wrapped).
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lm = np.log(P[rows, (kk - 1) % n_pad])
-            l0 = np.log(np.maximum(peak, 1e-300))
-            lp = np.log(P[rows, (kk + 1) % n_pad])
-            den = lm - 2 * l0 + lp
-            delta = np.where(np.abs(den) > 1e-12, 0.5 * (lm - lp) / den, 0.0)
-        delta = np.clip(np.nan_to_num(delta), -0.5, 0.5)
-        u = np.clip((k[kk] + delta) * c / (n_pad * fpos * dx), -1.0, 1.0)
-        inside = (u >= u_lo - 1e-12) & (u <= u_hi + 1e-12)
-        remove = go & inside & (n_removed < max_sources)
-        keep = go & ~remove & (n_kept < keep_sources)
-        present = remove | keep
-        n_removed += remove
-        n_kept += keep
-        # A bin whose loudest wave is neither removable nor keepable stops here.
-        active = active & present
-        if not present.any():
-            break
-        us.append(np.where(present, u, 0.0))
-        masks.append(present)
-        kinds.append(remove)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            info.append((present, 10 * np.log10(np.maximum(peak, 1e-300) / noise)))
-        Um, Mm = np.stack(us, axis=1), np.stack(masks, axis=1)
-        Um, A = joint_fit(X, freqs, x, Um, Mm, c, iters=fit_iters)
-        us = list(Um.T)
+        # Refine: successive parabolas on the exact band power, from a fifth of a grid step.
+        u, h = ug[g], 0.2 * (ug[1] - ug[0])
+        for _ in range(6):
+            p = [power_at(R, float(np.clip(u + d * h, -1, 1))) for d in (-1.0, 0.0, 1.0)]
+            den = p[0] - 2 * p[1] + p[2]
+            if den < 0:
+                u = float(np.clip(u + np.clip(0.5 * (p[0] - p[2]) / den, -1.0, 1.0) * h, -1, 1))
+            h *= 0.4
+        inside = u_lo - 1e-12 <= u <= u_hi + 1e-12
+        is_removed = inside and n_removed < max_sources
+        n_removed += is_removed
+        n_kept += not is_removed
+        us.append(u)
+        remove.append(is_removed)
+        snrs.append(float(10 * np.log10(B[g] / noise)))
+        u_fit, A = joint_fit(X, freqs, x, np.array(us), c, iters=fit_iters)
+        us = list(u_fit)
         V = np.exp(1j * (2 * np.pi * freqs / c)[:, None, None] * x[None, :, None]
-                   * Um[:, None, :])
-        V[np.broadcast_to(~Mm[:, None, :], V.shape)] = 0.0
+                   * u_fit[None, None, :])
         R = X - np.einsum("fck,fk->fc", V, A)
-    if not us:
+    if not any(remove):
         return X.astype(np.complex64), []
-    rm = np.stack(kinds, axis=1)
-    out = X - np.einsum("fck,fk->fc", V, np.where(rm, A, 0.0))
-    removed = []
-    for j, (present, snr) in enumerate(info):
-        sel = present & rm[:, j]
-        if sel.any():
-            removed.append({"bin": np.flatnonzero(sel),
-                            "cone_deg": np.rad2deg(np.arccos(us[j][sel])),
-                            "amp": A[sel, j], "snr_db": snr[sel]})
+    rm = np.array(remove)
+    V = np.exp(1j * (2 * np.pi * freqs / c)[:, None, None] * x[None, :, None]
+               * np.array(us)[None, None, rm])
+    out = X - np.einsum("fck,fk->fc", V, A[:, rm])
+    removed = [{"cone_deg": float(np.rad2deg(np.arccos(us[j]))), "amp": A[:, j],
+                "snr_db": snrs[j]} for j in np.flatnonzero(rm)]
     return out.astype(np.complex64), removed
 
 
@@ -224,7 +190,7 @@ class IBF(Stage):
     kind = "ibf"
     params = {
         "max_sources": Param("int", 3, "plane waves removed per bin at most", check=positive),
-        "stop_db": Param("float", 12.0, "stop when the loudest beam is less than this above the "
+        "stop_db": Param("float", 3.0, "stop when the loudest beam is less than this above the "
                          "noise estimate, dB"),
         "sector": Param("band", None, "[lo, hi] cone angles (deg) to peel (default: all)"),
         "keep_sources": Param("int", 2, "waves outside the sector (or beyond max_sources) kept "
@@ -267,8 +233,8 @@ class IBF(Stage):
         x = spec.positions[order, 0] - spec.positions[:, 0].mean()
         c = self.ctx.sound_speed
         data = spec.data.copy()
-        rows: dict[str, list[np.ndarray]] = {k: [] for k in
-                                             ("time", "cone_deg", "freq", "level_db", "snr_db")}
+        rows: dict[str, list[float]] = {k: [] for k in ("time", "cone_deg", "level_db", "snr_db",
+                                                        "freq_lo", "freq_hi")}
         nfft = spec.meta["nfft"]
         for s in range(data.shape[0]):
             res, removed = onion_peel(spec.data[s][:, order], spec.freqs, x, dx, c,
@@ -276,17 +242,17 @@ class IBF(Stage):
                                       None if self.sector is None else tuple(self.sector),
                                       self.keep_sources)
             data[s][:, order] = res
-            if out is not None:
-                for r in removed:
-                    n = r["bin"].size
-                    rows["time"].append(np.full(n, spec.meta["times"][s]))
-                    rows["cone_deg"].append(r["cone_deg"])
-                    rows["freq"].append(spec.freqs[r["bin"]])
-                    ms = 2.0 * np.abs(r["amp"]) ** 2 / nfft**2  # mean square of a bin tone
-                    rows["level_db"].append(10 * np.log10(np.maximum(ms, 1e-300) / 1e-12))
-                    rows["snr_db"].append(r["snr_db"])
+            for r in removed:
+                # In-band mean square of the wave at an element (Parseval, one-sided).
+                ms = 2.0 * float(np.sum(np.abs(r["amp"]) ** 2)) / nfft**2
+                rows["time"].append(float(spec.meta["times"][s]))
+                rows["cone_deg"].append(r["cone_deg"])
+                rows["level_db"].append(10 * np.log10(max(ms, 1e-300) / 1e-12))
+                rows["snr_db"].append(r["snr_db"])
+                rows["freq_lo"].append(float(spec.freqs[0]))
+                rows["freq_hi"].append(float(spec.freqs[-1]))
         if out is not None:
-            out.append(**{k: (np.concatenate(v) if v else np.zeros(0)) for k, v in rows.items()})
+            out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
         return spec.replace(data=data)
 
 
