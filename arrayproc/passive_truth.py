@@ -16,8 +16,9 @@ def _interp_track(t: np.ndarray, tt: np.ndarray, pos: np.ndarray) -> np.ndarray:
     return np.stack([np.interp(t, tt, pos[:, i]) for i in range(pos.shape[1])], -1)
 
 
-def sources(rec) -> dict[str, dict]:
-    """The recording's truth sources (excluding the tow ship), by name."""
+def sources(rec, towship: bool = True) -> dict[str, dict]:
+    """The recording's truth sources by name (the tow ship, a real noise source in the data,
+    included unless ``towship`` is false)."""
     if not rec.has("truth/sources"):
         return {}
     g = rec.read_group("truth/sources")
@@ -27,7 +28,7 @@ def sources(rec) -> dict[str, dict]:
             continue
         kind = s.get("attrs", {}).get("kind", "source")
         kind = kind.decode() if isinstance(kind, bytes) else str(kind)
-        if kind != "source":
+        if kind not in ("source", "towship") or (kind == "towship" and not towship):
             continue
         out[name] = s
     return out

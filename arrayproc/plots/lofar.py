@@ -63,7 +63,7 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                     ff = np.where(near, fr[:, k], np.nan)
                     if np.all(np.isnan(ff)):
                         continue
-                    ax.plot(ff, t, ls=":", lw=1.0, alpha=0.6, color=f"C{(i + 1) % 10}",
+                    ax.plot(ff, t, ls=(0, (3, 4)), lw=1.0, alpha=0.8, color=f"C{(i + 1) % 10}",
                             label=f"truth: {name}" if k == 0 else None)
                     first = False
             if not first:
