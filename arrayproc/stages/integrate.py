@@ -3,7 +3,9 @@
     S_inco(θ, f) = Σ_{b=1}^{N_B} |Ξ_b(θ, f)|²
 
 over ``snapshots`` = N_B consecutive CBF snapshots. ``mode = "blockwise"`` sums disjoint groups
-of N_B snapshots (one output per N_B inputs); ``mode = "sliding"`` emits, for every input
+of N_B snapshots (one output per N_B inputs), aligned on the absolute snapshot grid (snapshot
+number = first sample // hop, a multiple of N_B starts a group), so that a run started
+anywhere integrates the same groups; ``mode = "sliding"`` emits, for every input
 snapshot from the N_B-th on, the sum over the last N_B (one output per input). For white
 Gaussian noise the sum is Gamma distributed with shape N_B and scale E|Ξ|² (eq. 2.24).
 
@@ -48,7 +50,9 @@ class Integrate(Stage):
         tail_p: np.ndarray | None = None  # powers not yet fully used (T, F, B)
         tail_t = np.zeros(0)
         tail_h = np.zeros(0)
+        tail_k = np.zeros(0, np.int64)
         index = 0
+        count = 0  # running snapshot number when the input carries no sample grid
         for b in blocks:
             if b.domain != ("snapshot", "freq", "beam"):
                 raise ConfigError(f"stage {self.name!r}: needs ('snapshot', 'freq', 'beam') "
@@ -61,12 +65,24 @@ class Integrate(Stage):
                 p[...] = y
             times = np.asarray(b.meta.get("times", np.full(y.shape[0], b.t_centre)), float)
             heads = np.asarray(b.meta.get("headings", np.zeros(y.shape[0])), float)
-            if tail_p is not None and tail_p.shape[1:] != p.shape[1:]:
-                tail_p = None  # axes changed: start afresh
-                tail_t, tail_h = np.zeros(0), np.zeros(0)
+            if "starts" in b.meta and b.meta.get("hop"):
+                ks = np.asarray(b.meta["starts"], np.int64) // int(b.meta["hop"])
+            else:
+                ks = count + np.arange(y.shape[0], dtype=np.int64)
+            count = int(ks[-1]) + 1 if ks.size else count
+            if tail_p is not None and (tail_p.shape[1:] != p.shape[1:] or (
+                    tail_k.size and ks.size and ks[0] != tail_k[-1] + 1)):
+                tail_p = None  # axes changed or snapshots missing: start afresh
+                tail_t, tail_h, tail_k = np.zeros(0), np.zeros(0), np.zeros(0, np.int64)
             buf = p if tail_p is None or tail_p.shape[0] == 0 else np.concatenate([tail_p, p])
             tb = np.concatenate([tail_t, times])
             hb = np.concatenate([tail_h, heads])
+            kb = np.concatenate([tail_k, ks])
+            if self.mode == "blockwise" and kb.size:
+                # windows on the absolute snapshot grid (snapshot k·N starts one), so a run
+                # started anywhere (a segment with warm-up) integrates the same snapshots
+                lead = min(int((-kb[0]) % n), kb.size)
+                buf, tb, hb, kb = buf[lead:], tb[lead:], hb[lead:], kb[lead:]
             t_n = buf.shape[0]
             k = 0 if t_n < n else (t_n - n) // step + 1
             if k:
@@ -87,4 +103,4 @@ class Integrate(Stage):
                 index += k
             used = k * step
             tail_p = buf[used:].copy() if used < t_n else buf[:0]
-            tail_t, tail_h = tb[used:], hb[used:]
+            tail_t, tail_h, tail_k = tb[used:], hb[used:], kb[used:]
