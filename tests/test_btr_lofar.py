@@ -168,3 +168,17 @@ def test_plot_errors_are_one_line(tmp_path):
         pass
     with pytest.raises(ArrayprocError, match="no btr product"):
         plot_file(str(p), str(tmp_path / "x.png"), "btr")
+
+
+def test_plot_command_line(tmp_path):
+    from arrayproc.cli import main
+    rec_path = write_truth_recording(tmp_path / "rec.h5", dur=12.0)
+    prod = tmp_path / "prod.h5"
+    chain = tmp_path / "chain.toml"
+    chain.write_text(CHAIN)
+    assert main(["process", str(rec_path), "-c", str(chain), "-o", str(prod), "-q"]) == 0
+    for kind in ("btr", "lofar"):
+        out = tmp_path / f"{kind}.png"
+        assert main(["plot", str(prod), "--kind", kind, "--beam", "60", "--range-db", "25",
+                     "-o", str(out)]) == 0
+        assert out.stat().st_size > 10_000
