@@ -149,3 +149,39 @@ def test_duration_override(tmp_path):
     out = simulate_file(SCENARIOS / "towed_passive.toml", tmp_path / "s.h5", duration=1.0)
     with Recording(out) as r:
         assert r.n_samples == int(r.fs)
+
+
+@pytest.mark.parametrize("mutate, match", [
+    (lambda d: d["recording"].update(start_time="yesterday"), r"start_time: not an ISO-8601"),
+    (lambda d: d["ownship"].update(heading=10.0), r"\[ownship\] heading: only for a static"),
+    (lambda d: d["active"]["clutter"].update(area=[1.0, 0.0, 0.0, 1.0]), r"clutter\] area"),
+    (lambda d: d["source"][1].update(name="a"), r"duplicate or reserved source name"),
+])
+def test_more_scenario_errors(mutate, match):
+    d = copy.deepcopy(EVERYTHING)
+    mutate(d)
+    with pytest.raises(ConfigError, match=match):
+        parse_scenario(d, "everything.toml")
+
+
+@pytest.mark.slow
+def test_long_recording_memory_is_bounded(tmp_path):
+    """A 20-minute 64-channel recording (600 MiB) streams without growing the process."""
+    import resource
+    d = {"recording": {"fs": 2048.0, "duration": 1200.0, "seed": 1},
+         "array": {"type": "line", "n": 64, "spacing": 0.36, "depth": 50.0},
+         "ownship": {"start": [0.0, 0.0], "course": 0.0, "speed_kn": 5.0},
+         "source": [{"name": "s", "start": [3000.0, 0.0], "depth": 20.0, "course": 180.0,
+                     "speed": 3.0, "tonals": [{"freq": 300.0, "level_db": 140.0}],
+                     "broadband": {"band": [50.0, 900.0], "level_db": 110.0}}],
+         "noise": {"level_db": 60.0}}
+    warm = copy.deepcopy(d)
+    warm["recording"]["duration"] = 5.0
+    simulate(parse_scenario(warm, "short.toml"), tmp_path / "warm.h5")
+    (tmp_path / "warm.h5").unlink()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    out = simulate(parse_scenario(d, "long.toml"), tmp_path / "long.h5")
+    grown = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
+    size = out.stat().st_size / 2**20
+    print(f"20 min x 64 ch: file {size:.0f} MiB, peak RSS grew {grown:.0f} MiB")
+    assert size > 550 and grown < 100

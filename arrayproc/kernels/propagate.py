@@ -91,7 +91,7 @@ def _solve(ex: float, ey: float, ez: float, tau0: float, p: np.ndarray, v: np.nd
         dx = ex - sx
         dy = ey - sy
         dz = ez - sz
-        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        dist = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-6)
         f = c * tau - dist
         fp = c - (dx * wx + dy * wy + dz * wz) / dist
         tau -= f / fp

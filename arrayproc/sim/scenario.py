@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
@@ -178,10 +179,14 @@ def _speed(t: _Table, required: bool = True) -> float | None:
     return t.num("speed", 0.0 if not required else None, required=required, nonneg=True)
 
 
-def _trajectory(t: _Table, need_motion: bool = True) -> tuple[Trajectory, bool]:
+def _trajectory(t: _Table) -> tuple[Trajectory, bool]:
     """``start`` [x, y] and either ``course``+``speed``/``speed_kn`` or ``[[leg]]``s, or
     ``heading`` (static). Returns (trajectory, static)."""
     start = t.vec("start", 2, default=[0.0, 0.0])
+    if t.has("heading") and (t.has("leg") or t.has("course") or t.has("speed")
+                             or t.has("speed_kn")):
+        raise t.err("heading", "only for a static track (the heading of a moving one is its "
+                    "course); give heading or course/speed/legs, not both")
     legs_t = t.subs("leg")
     if legs_t:
         if t.has("course") or t.has("speed") or t.has("speed_kn"):
@@ -207,8 +212,6 @@ def _trajectory(t: _Table, need_motion: bool = True) -> tuple[Trajectory, bool]:
         traj = Trajectory.from_legs(start, [{"course": course, "speed": speed, "duration": 0.0}])
         return traj, speed == 0.0
     heading = t.num("heading", 0.0)
-    if need_motion and not t.has("heading"):
-        pass
     return Trajectory.static(start, heading), True
 
 
@@ -383,6 +386,11 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     c = rec.num("sound_speed", 1500.0, positive=True)
     seed = rec.int_("seed", 0, minimum=0)
     start_time = rec.str_("start_time", None)
+    if start_time is not None:
+        try:
+            datetime.fromisoformat(start_time.replace("Z", "+00:00"))
+        except ValueError:
+            raise rec.err("start_time", f"not an ISO-8601 time: {start_time!r}") from None
     chunk = rec.int_("chunk", 8192, minimum=64)
     truth_interval = rec.num("truth_interval", 1.0, positive=True)
     nav_interval = rec.num("nav_interval", 1.0, positive=True)
