@@ -324,17 +324,21 @@ class CBF(Stage):
                 z = np.matmul(x2, steer[a:e])
                 kb.unpack_beams(z, uidx, sign, y, a)
 
-        starts = range(0, nf, BINS_PER_TASK)
+        chunks = list(range(0, nf, BINS_PER_TASK))
         if n_thr <= 1:
             old = set_local_threads(1)
             try:
-                for a in starts:
+                for a in chunks:
                     task(a)
             finally:
                 if old is not None:
                     set_local_threads(old)
-        else:
-            list(_pool(n_thr).map(task, starts))
+        else:  # one job per worker (few hand-offs), each looping over its chunks of bins
+            def job(part: list[int]) -> None:
+                for a in part:
+                    task(a)
+            parts = [chunks[i::n_thr] for i in range(n_thr)]
+            list(_pool(n_thr).map(job, [p for p in parts if p]))
         return y
 
     def _out_buffer(self, shape: tuple[int, ...]) -> np.ndarray:
