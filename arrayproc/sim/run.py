@@ -17,7 +17,7 @@ from ..io.recording import RecordingWriter
 from ..kernels.fracdelay import HALF_WIDTH, OVERSAMPLING, default_table
 from ..kernels.propagate import oneway_accumulate
 from .active import ActiveSim, PingTrain
-from .motion import TrackMover
+from .motion import BodyOffsetMover, TrackMover
 from .noise import ambient_noise
 from .propagation import LossLaw, Pose, grid_nodes, retarded_time
 from .scenario import Scenario, load_scenario
@@ -64,10 +64,9 @@ class Simulator:
         mean_speed = self._mean_own_speed()
         for i, sp in enumerate(scen.sources):
             if sp.kind == "towship":
-                if mean_speed > 0:
+                if mean_speed > 0:  # on the array's own track, `distance` m ahead
                     mover = TrackMover(scen.ownship, sp.depth, lead=sp.lead / mean_speed)
-                else:
-                    from .motion import BodyOffsetMover
+                else:  # static array: along its heading
                     mover = BodyOffsetMover(self.own, [sp.lead, 0.0, sp.depth - arr.depth])
             else:
                 mover = TrackMover(sp.traj, sp.depth)
@@ -229,7 +228,7 @@ def simulate(scen: Scenario, out_path: str | Path, progress: bool = False,
     bar = None
     if progress:
         from tqdm import tqdm
-        bar = tqdm(total=round(n / scen.fs, 1), unit="s", desc="simulate", leave=False)
+        bar = tqdm(total=n, unit="sample", unit_scale=True, desc="simulate", leave=False)
     try:
         with RecordingWriter(out_path, scen.fs, sim.n_channels, positions=sim.nominal,
                              sound_speed=scen.sound_speed, start_time=scen.start_time,
@@ -238,7 +237,7 @@ def simulate(scen: Scenario, out_path: str | Path, progress: bool = False,
                 k1 = min(n, k0 + scen.chunk)
                 w.append(sim.render(k0, k1))
                 if bar is not None:
-                    bar.update(round((k1 - k0) / scen.fs, 1))
+                    bar.update(k1 - k0)
             w.set_nav(*sim.nav())
             groups, gattrs = sim.truth()
             _write_truth(w, groups, gattrs)
