@@ -265,3 +265,16 @@ def test_towship_ahead_arrives_from_forward_endfire():
     err = np.angle(np.exp(1j * ((ph - ph[0]) - want)))
     print(f"tow ship from forward end-fire: phase error {np.max(np.abs(err)):.3f} rad")
     assert np.max(np.abs(err)) < 0.05  # near field: 300 m vs a 14 m aperture
+
+
+def test_towship_of_a_static_array_lies_along_its_heading():
+    d = scenario(array={"n": 2}, recording={"duration": 1.0})
+    d["ownship"] = {"start": [10.0, 20.0], "heading": 30.0}
+    d["noise"] = {"towship": {"distance": -200.0, "depth": 5.0,  # behind: aft end-fire
+                              "tonals": [{"freq": 50.0, "level_db": 140.0}]}}
+    sim, x = render(d)
+    ship = sim.truth()[0]["sources"]["towship"]["position"][0]
+    h = np.deg2rad(30.0)
+    want = np.array([10.0, 20.0]) - 200.0 * np.array([np.sin(h), np.cos(h)])
+    np.testing.assert_allclose(ship, want, atol=1e-9)
+    assert np.all(np.isfinite(x)) and np.std(x) > 0
