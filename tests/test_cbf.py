@@ -360,3 +360,46 @@ def test_fold_kernels_against_numpy(rng):
     b = np.einsum("fsk,fku->fsu", sdif, gs)
     want = np.concatenate([a - 1j * b, (a + 1j * b)[:, :, ::-1]], axis=2).transpose(1, 0, 2)
     assert np.allclose(y, want, atol=1e-4)
+
+
+def test_two_cbf_branches_of_the_same_shape_do_not_share_buffers(tmp_path, rng):
+    """Two cbf branches on the same stream (a fan-out, each with its own FFT buffer) give the
+    products each gives alone."""
+    from arrayproc.chain import run_chain
+    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.io.recording import Recording
+    from tests.conftest import write_recording
+    fs, n_h = 1000.0, 8
+    pos = line_array(n_h, 0.7)
+    x = rng.standard_normal((6000, n_h)).astype(np.float32)
+    rec = write_recording(tmp_path / "r.h5", x, fs=fs, positions=pos)
+    branch = """
+[[stage]]
+type = "cbf"
+name = "cbf_{k}"
+input = "pass"
+nfft = 128
+hop = 64
+batch = 8
+window = "{win}"
+beams = {{ start = 0.0, stop = 180.0, count = {nb} }}
+[[stage]]
+type = "integrate"
+name = "int_{k}"
+[[stage]]
+type = "btr"
+name = "btr_{k}"
+"""
+    text = ("[input]\nblock = 700\n[[stage]]\ntype = \"pass\"\n"
+            + branch.format(k="a", nb=19, win="hann")
+            + branch.format(k="b", nb=37, win="hamming"))
+    with Recording(rec) as r, ProductsWriter(tmp_path / "p.h5") as w:
+        run_chain(r, build_chain(text), w)
+    g = read_products(tmp_path / "p.h5")
+    for k, nb, win in (("a", 19, "hann"), ("b", 37, "hamming")):
+        _, y, _ = run_cbf(x, fs, pos, nfft=128, hop=64, batch=8, window=win,
+                          beams={"start": 0.0, "stop": 180.0, "count": nb})
+        p = np.abs(y.astype(np.complex128)) ** 2
+        n = (p.shape[0] // 8) * 8
+        want = 10 * np.log10(p[:n].reshape(-1, 8, *p.shape[1:]).sum(1).sum(1) / 1e-12)
+        assert np.allclose(g[f"btr_{k}"]["power_db"], want, atol=1e-3)

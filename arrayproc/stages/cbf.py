@@ -276,14 +276,19 @@ class CBF(Stage):
 
     # -- compute -----------------------------------------------------------------------
     def _plan(self, n_ch: int):
-        """The FFT plan of this stream: (batch, nfft, C) frames, transform along axis 1."""
+        """This stage's FFT plan: (batch, nfft, C) frames, transform along axis 1. Owned by the
+        stage (not the shared plan cache): frames wait in its input buffer across blocks, so
+        another CBF stage of the same shape in the chain must not share it."""
         kind, dt = ("fft", np.complex64) if self._complex else ("rfft", np.float32)
-        return fft.buffered_plan(kind, (self.batch, self.nfft, n_ch), dt, axis=1)
+        key = (kind, self.batch, self.nfft, n_ch)
+        plans = self.__dict__.setdefault("_plans", {})
+        if key not in plans:
+            plans.clear()
+            plans[key] = fft.BufferedPlan(kind, (self.batch, self.nfft, n_ch), dt, axis=1)
+        return plans[key]
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
-        """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`).
-
-        The returned array may be recycled by the stage once nobody references it."""
+        """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`)."""
         out = []
         for a in range(0, frames.shape[0], self.batch):
             part = frames[a:a + self.batch]
