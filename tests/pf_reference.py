@@ -151,7 +151,7 @@ def rpf(theta, level, use_level, times, obs, seed, n, n_thr, sigma_a, sig_theta,
             neff = 1.0 / np.sum(w**2)
         if neff < n_thr * n:
             _, p = mean_cov(x, w)
-            d = np.linalg.cholesky(p)
+            d = np.linalg.cholesky(p + 1e-10 * np.diag(np.diag(p)))
             idx = resample(st, w, method)
             eps = st.epanechnikov(n)
             x = x[idx] + h * eps @ d.T

@@ -133,12 +133,34 @@ def test_cholesky_and_regularise_match_reference():
     p = np.cov(x.T, bias=True)
     d = np.empty((4, 4))
     assert k.cholesky4(p, d)
-    np.testing.assert_allclose(d, np.linalg.cholesky(p), rtol=1e-12)
+    np.testing.assert_allclose(d, np.linalg.cholesky(p + 1e-10 * np.diag(np.diag(p))),
+                               rtol=1e-12)
     idx = np.sort(np.random.default_rng(9).integers(0, 200, 200))
     out = np.empty_like(x)
     k.regularise(out, x, idx, d, 0.5, _state())
     exp = x[idx] + 0.5 * ref.Stream(SEED).epanechnikov(200) @ d.T
     np.testing.assert_allclose(out, exp, rtol=1e-12, atol=1e-9)
+
+
+def test_cholesky_of_a_degenerate_cloud_stays_bounded():
+    """All particles on a line (rank-1 covariance, rounding noise in the Schur complements):
+    the factor must stay of the size of the standard deviations (a regression: dividing by
+    a rounding-error pivot once sent a velocity to 4e7 m/s)."""
+    g = np.random.default_rng(1)
+    t = g.normal(size=500)
+    x = np.column_stack([4000 + 30 * t, -1400 + 9 * t, 0.06 * t - 1.1, 0.009 * t - 1.8])
+    p = np.cov(x.T, bias=True)
+    d = np.empty((4, 4))
+    assert k.cholesky4(p, d)
+    assert np.all(np.isfinite(d))
+    assert np.all(np.abs(d) <= np.sqrt((1 + 1e-9) * np.diag(p))[:, None])
+    np.testing.assert_allclose(d @ d.T, p, rtol=1e-6, atol=1e-8 * np.abs(p).max())
+    zero = p.copy()
+    zero[3, :] = zero[:, 3] = 0.0                    # a dimension with no spread
+    assert k.cholesky4(zero, d) and np.all(d[3] == 0.0) and np.all(np.isfinite(d))
+    bad = p.copy()
+    bad[0, 0] = np.nan
+    assert not k.cholesky4(bad, d)
 
 
 def _run_setup(n_steps=15):

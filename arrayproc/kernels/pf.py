@@ -318,28 +318,48 @@ def multinomial_resample(w, s, idx, state):
         idx[j] = k
 
 
+CHOL_JITTER = 1e-10
+
+
 @njit(cache=True)
 def cholesky4(p, d):
-    """Lower Cholesky factor D of a 4×4 covariance (P = D Dᵀ, SPL paper eq. (21)). A
-    non-positive pivot (degenerate cloud) is replaced by 1e-12 of the diagonal; returns False
-    if P is not finite."""
+    """Lower Cholesky factor D of a 4×4 covariance, D Dᵀ = P + δ·diag(P), δ = 1e-10
+    (SPL paper eq. (21), P_k = D_k D_kᵀ).
+
+    Factorised on the correlation matrix (unit diagonal) with the jitter δ, then scaled back,
+    so a rank-deficient cloud (e.g. all particles on a line) gives a bounded factor,
+    |D_ij| ≤ √((1 + δ) P_ii), instead of dividing by a rounding-error pivot. A dimension with
+    zero variance gets a zero row. Returns False if P is not finite.
+    """
+    sc = np.empty(NX)
+    for a in range(NX):
+        if not math.isfinite(p[a, a]):
+            return False
+        sc[a] = math.sqrt(p[a, a]) if p[a, a] > 0.0 else 0.0
     for a in range(NX):
         for b in range(NX):
             d[a, b] = 0.0
     for j in range(NX):
-        s = p[j, j]
+        if sc[j] == 0.0:
+            continue
+        s = 1.0 + CHOL_JITTER
         for k in range(j):
             s -= d[j, k] * d[j, k]
-        if not math.isfinite(s):
-            return False
-        if not s > 0.0:
-            s = 1e-12 * (abs(p[j, j]) + 1e-12)
+        if s < 0.5 * CHOL_JITTER:
+            s = 0.5 * CHOL_JITTER
         d[j, j] = math.sqrt(s)
         for i in range(j + 1, NX):
-            s = p[i, j]
+            if sc[i] == 0.0:
+                continue
+            c = p[i, j] / (sc[i] * sc[j])
+            if not math.isfinite(c):
+                return False
             for k in range(j):
-                s -= d[i, k] * d[j, k]
-            d[i, j] = s / d[j, j]
+                c -= d[i, k] * d[j, k]
+            d[i, j] = c / d[j, j]
+    for i in range(NX):
+        for j in range(i + 1):
+            d[i, j] *= sc[i]
     return True
 
 
