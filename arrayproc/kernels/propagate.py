@@ -11,7 +11,7 @@ retarded time is a second-order Taylor expansion about t_k − τ_ref, τ_ref cl
 reference point's retarded time (exact position, velocity and acceleration supplied by the
 caller), valid because |τ − τ_ref| ≤ aperture/c; the neglected third-order term is below
 1e-9 m for ship motion. τ is found by one fixed-point step and one Newton step (quadratic
-convergence; the residual is below 1e-12 s for ship speeds and ranges above a few metres).
+convergence; residual ≤ 3e-11 s at 10 m range and 20 m/s, ~1e-12 s beyond 100 m).
 The received pressure is ``g(cτ) · s(t_k − τ)``, with ``s`` read by the windowed-sinc
 fractional-delay interpolator, so Doppler and wavefront curvature come from the geometry.
 
@@ -69,8 +69,9 @@ def _solve(ex: float, ey: float, ez: float, tau0: float, p: np.ndarray, v: np.nd
     """τ with c·τ = |e − x_s(t − τ)|, x_s Taylor-expanded about t − tau0 (row k of p, v, a).
 
     One fixed-point step from the expansion point (error ≤ (|v|/c)·|τ − tau0|, < 1e-4 s)
-    then one Newton step, which squares the relative error: the residual is below 1e-12 s
-    for ship speeds (|v| < 20 m/s) and ranges above a few metres.
+    then one Newton step, which squares the relative error. Measured against the converged
+    root (element 12 m off the expansion point, |v| = 20 m/s, |a| ~ 0.5 m/s²): 3e-11 s at
+    10 m range, 3e-12 s at 100 m, about 1e-12 s (rounding) at 1-10 km.
     """
     px = p[k, 0]
     py = p[k, 1]
