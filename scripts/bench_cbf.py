@@ -73,15 +73,22 @@ def make_stage(threads: int) -> CBF:
     return _STAGES[threads]
 
 
+_CPU: dict[str, list[float]] = {}
+
+
 def run_stage(seconds: float, integrate: bool = False, threads: int = 0) -> float:
-    """Wall time (s) of the cbf stage (optionally + integrate) over ``seconds`` of data."""
+    """Wall time (s) of the cbf stage (optionally + integrate) over ``seconds`` of data; the
+    process CPU time (all threads) is recorded in ``_CPU``."""
     it = make_stage(threads).process(source(seconds))
     if integrate:
         it = Integrate(snapshots=8, mode="blockwise").process(it)
+    c = time.process_time()
     t = time.perf_counter()
     for _ in it:
         pass
-    return time.perf_counter() - t
+    wall = time.perf_counter() - t
+    _CPU.setdefault("integrate" if integrate else "cbf", []).append(time.process_time() - c)
+    return wall
 
 
 def numpy_reference(n_snap: int, single: bool = False) -> float:
@@ -99,6 +106,7 @@ def numpy_reference(n_snap: int, single: bool = False) -> float:
     steer = np.exp(-2j * np.pi * f[sel, None, None] * tau[None])
     if single:
         steer = steer.astype(np.complex64)
+    c = time.process_time()
     t = time.perf_counter()
     for s in range(n_snap):
         frame = x[s * HOP:s * HOP + NFFT]
@@ -106,7 +114,9 @@ def numpy_reference(n_snap: int, single: bool = False) -> float:
         if single:
             spec = spec.astype(np.complex64)
         np.einsum("fbc,fc->fb", steer, spec)
-    return (time.perf_counter() - t) / n_snap
+    wall = (time.perf_counter() - t) / n_snap
+    _CPU.setdefault("ref32" if single else "ref", []).append((time.process_time() - c) / n_snap)
+    return wall
 
 
 def peak_memory(seconds: float) -> float:
@@ -166,6 +176,10 @@ def main() -> None:
     mem_short = peak_memory(args.seconds / 2)
     mem_long = peak_memory(args.seconds * 2)
     rss = {f"{sec:g}s": peak_rss_child(sec) for sec in (args.seconds / 4, args.seconds * 4)}
+    # CPU time (all threads): data seconds per CPU second, insensitive to how many cores the
+    # machine's load left us (the first run of each list may include warm-up effects)
+    cpu_cbf = args.seconds / min(_CPU["cbf"][-args.repeat:])
+    cpu_ref = 1.0 / (min(_CPU["ref"]) * snaps_per_s)
     res = {
         "config": {"channels": N_CH, "fs_hz": FS, "nfft": NFFT, "hop": HOP,
                    "beams": BEAMS["count"], "band_hz": list(BAND), "bins": 761,
@@ -179,6 +193,9 @@ def main() -> None:
         "peak_traced_mb": {f"{args.seconds / 2:g}s": mem_short,
                            f"{args.seconds * 2:g}s": mem_long},
         "peak_rss_mb": rss,
+        "cpu_cbf_x_realtime_per_cpu_second": cpu_cbf,
+        "cpu_numpy_ref_x_realtime_per_cpu_second": cpu_ref,
+        "cpu_ratio": cpu_cbf / cpu_ref,
         "first_run_5s_wall_s": setup,
         "load_avg_1min": os.getloadavg()[0],
         "cpu_count": os.cpu_count(),
@@ -191,6 +208,8 @@ def main() -> None:
     print(f"{'numpy per-snapshot ref':24s}{rt_ref:14.2f}")
     print(f"{'  same, complex64':24s}{rt_ref32:14.2f}")
     print(f"ratio cbf / numpy ref: {rt_cbf / rt_ref:.1f} (complex64 ref: {rt_cbf / rt_ref32:.1f})")
+    print(f"CPU time (all threads): cbf {cpu_cbf:.1f}x real time per CPU second, numpy ref "
+          f"{cpu_ref:.2f}x, ratio {cpu_cbf / cpu_ref:.1f}")
     print("peak traced memory (fresh stage): " + ", ".join(
         f"{k} of data: {v:.0f} MB" for k, v in res["peak_traced_mb"].items()))
     print("peak RSS of a fresh process: " + ", ".join(
