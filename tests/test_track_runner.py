@@ -122,3 +122,35 @@ def test_assign_by_continuity_follows_a_turn_through_the_target():
     i_true = int(np.argmin(np.abs(wrapped[1] - true[1])))
     np.testing.assert_allclose(wrapped[:, i_true], true, atol=1e-12)
     np.testing.assert_allclose(wrapped[:, 1 - i_true], ghost, atol=1e-12)
+
+
+def test_generic_per_step_path_equals_kernel_path():
+    """A filter without numba kernel arguments (e.g. a particle filter registered in FILTERS)
+    goes through the per-step LRResolver path; for an EKF both paths must agree."""
+    from arrayproc.track import filters
+    from arrayproc.track.runner import track_bearings
+
+    class PyEKF(filters.EKF):
+
+        def __getattribute__(self, name):  # hasattr(f, "kernel_args") is False
+            if name == "kernel_args":
+                raise AttributeError(name)
+            return super().__getattribute__(name)
+
+    scn = LRScenario(case=1)
+    g = scn.geometry()
+    y1, y2, _, _ = scn.measurements(1, 4)
+    zs = np.stack([y1[0], y2[0]], axis=1)
+    cfg = load_tracker_config(os.path.join(DATA, "ukf_lr.toml"))
+    cfg["filter"] = "ekf"
+    cfg["params"] = {}
+    a = track_bearings(g["times"], zs, g["own"], cfg)
+    filters.FILTERS["ekf_py"] = PyEKF
+    try:
+        cfg["filter"] = "ekf_py"
+        b = track_bearings(g["times"], zs, g["own"], cfg)
+    finally:
+        del filters.FILTERS["ekf_py"]
+    np.testing.assert_allclose(b[0], a[0], rtol=1e-8, atol=1e-6)
+    np.testing.assert_allclose(b[2], a[2], rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(b[1], a[1], rtol=1e-6, atol=1e-6 * np.abs(a[1]).max())
