@@ -45,7 +45,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..errors import ArrayprocError, ConfigError, FormatError
+from ..errors import ConfigError, FormatError
 from ..kernels import track_core as kc
 from .filters import FILTERS, FilterDivergence, make_filter
 from .init import TrackPrior, init_from_bearing
@@ -230,9 +230,7 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
     try:
         filt = make_filter(cfg["filter"], model, float(cfg["sigma_bearing_deg"]),
                            **cfg["params"])
-    except ConfigError:
-        raise
-    except (TypeError, ValueError) as e:
+    except ValueError as e:
         raise ConfigError(f"tracker.params: {e}") from None
     prior = TrackPrior(sigma_bearing_deg=float(cfg["sigma_bearing_deg"]),
                        **{k: float(cfg[k]) for k in _PRIOR_KEYS if k in cfg})
@@ -320,4 +318,4 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
 
 
 __all__ = ["run_tracker", "load_tracker_config", "track_bearings", "ownship_states",
-           "assign_by_continuity", "ArrayprocError"]
+           "assign_by_continuity"]
