@@ -246,16 +246,15 @@ def two_sources(tmp: Path, quick: bool) -> dict:
 def ibf_alone(tmp: Path, quick: bool) -> dict:
     dur = 30.0 if quick else 60.0
     # Beam power = N_H × element SNR per bin: +30 dB at the beam ⇒ element level 60 + 11.9 dB
-    # re 1 µPa²/Hz; from 10 km (−80 dB): SL 151.9; the weak one 10 dB lower. The simulator's
-    # band level comes out 5.7 dB lower at the beam than this budget (measured:
-    # strong_before_db = 24.3 dB), so both are raised by 5.7 dB to put the strong wave 30 dB
-    # above the noise as measured.
+    # re 1 µPa²/Hz; from 10 km (−80 dB): SL 151.9; the weak one 10 dB lower. Measured at the
+    # beams with a Hann taper this budget lands 1.2 dB short, hence the + 1.2 dB; the measured
+    # levels over the noise floor are reported (strong_above_noise_db, weak_above_noise_db).
     def bb(cone, level, name):
         b = np.deg2rad(cone)
         return {"name": name, "start": [1e4 * np.sin(b), 1e4 * np.cos(b)], "depth": 50.0,
                 "broadband": {"band": [150.0, 350.0], "level_db": level}}
-    strong = bb(61.3, 60.0 + 10 * np.log10(1000 / N_H) + 80.0 + 5.7, "strong")
-    weak = bb(81.3, 60.0 + 10 * np.log10(100 / N_H) + 80.0 + 5.7, "weak")
+    strong = bb(61.3, 60.0 + 10 * np.log10(1000 / N_H) + 80.0 + 1.2, "strong")
+    weak = bb(81.3, 60.0 + 10 * np.log10(100 / N_H) + 80.0 + 1.2, "weak")
     both = sim(scenario(dur, 0.0, [strong, weak], noise_db=60.0, seed=31), tmp / "ibf2.h5")
     ref = sim(scenario(dur, 0.0, [weak], noise_db=60.0, seed=32), tmp / "ibf1.h5")
     band = [200.0, 300.0]
@@ -272,7 +271,10 @@ def ibf_alone(tmp: Path, quick: bool) -> dict:
     cone = np.linspace(0, 180, 361)
     i1, i2 = np.argmin(np.abs(cone - 61.3)), np.argmin(np.abs(cone - 81.3))
     away = np.abs(cone - 81.3) > 10
-    return {"strong_before_db": float(before[i1] - reference[i1]),
+    floor = float(np.median(reference[cone > 120]))  # noise only, far from both waves
+    return {"strong_above_noise_db": float(before[i1] - floor),
+            "weak_above_noise_db": float(reference[i2] - floor),
+            "strong_before_db": float(before[i1] - reference[i1]),
             "removed_residual_db": float(after[i1] - reference[i1]),
             "max_excess_away_from_weak_db": float(np.max(after[away] - reference[away])),
             "weak_source_change_db": float(after[i2] - reference[i2])}
@@ -314,7 +316,7 @@ def plots(res: dict, extra: dict, outdir: Path) -> None:
            ylabel="Pr(noise ≥ signal)", ylim=(1e-4, 1.1))
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, which="both")
-    ax.set_title("Modified false-alarm probability: lines theory, markers Monte Carlo")
+    ax.set_title("Modified PFA (fig. 2.8): lines theory, markers Monte Carlo", fontsize=10)
     fig.tight_layout()
     fig.savefig(outdir / "psas_pfa_fig2_8.png", dpi=120)
     plt.close(fig)

@@ -157,3 +157,133 @@ def beam_at(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, dx: floa
         for n in range(n_c - 2, -1, -1):
             acc = acc * r + x[f, n]
         out[f] = acc * complex(np.cos(-k * x0), np.sin(-k * x0))
+
+
+@njit(cache=True)
+def _solve_small(G: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """Solve the K×K complex system G a = b by Gaussian elimination with partial pivoting
+    (G and b are overwritten)."""
+    k = b.shape[0]
+    for i in range(k):
+        p = i
+        for r in range(i + 1, k):
+            if abs(G[r, i]) > abs(G[p, i]):
+                p = r
+        if p != i:
+            for c in range(k):
+                G[i, c], G[p, c] = G[p, c], G[i, c]
+            b[i], b[p] = b[p], b[i]
+        piv = G[i, i]
+        if abs(piv) == 0.0:
+            piv = 1e-300
+        for r in range(i + 1, k):
+            m = G[r, i] / piv
+            for c in range(i, k):
+                G[r, c] -= m * G[i, c]
+            b[r] -= m * b[i]
+    for i in range(k - 1, -1, -1):
+        s = b[i]
+        for c in range(i + 1, k):
+            s -= G[i, c] * out[c]
+        piv = G[i, i] if abs(G[i, i]) > 0.0 else 1e-300
+        out[i] = s / piv
+
+
+@njit(cache=True, parallel=True)
+def plane_wave_fit(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, dx: float,
+                   c: float, amp: np.ndarray, hess: np.ndarray, grad: np.ndarray) -> None:
+    """One variable-projection Gauss-Newton evaluation for K plane waves, bin by bin.
+
+    Signatures v_k(f)_n = exp(+j 2π f (x0 − n δx) u_k / c) (elements fore → aft). Per bin:
+    amplitudes a = (VᴴV + loading)⁻¹ Vᴴ X (``amp`` (F, K)), residual r = X − V a, Jacobian
+    J_k = −a_k (j 2π f x / c) ⊙ v_k, and the bin's normal equations ``hess`` (F, K, K) =
+    Re(JᴴJ) and ``grad`` (F, K) = Re(Jᴴ r). Summing them over bins gives the band-wide step
+    of :func:`arrayproc.stages.ibf.joint_fit`.
+    """
+    n_f, n_c = x.shape
+    n_k = u.shape[0]
+    chunk = 64
+    for ch in prange((n_f + chunk - 1) // chunk):
+        # scratch allocated once per chunk of bins
+        V = np.empty((n_k, n_c), np.complex128)
+        J = np.empty((n_k, n_c), np.complex128)
+        G = np.empty((n_k, n_k), np.complex128)
+        b = np.empty(n_k, np.complex128)
+        a = np.empty(n_k, np.complex128)
+        r = np.empty(n_c, np.complex128)
+        for f in range(ch * chunk, min(n_f, (ch + 1) * chunk)):
+            kk = TWO_PI * freqs[f] / c
+            for j in range(n_k):
+                ph = kk * u[j]
+                rr = complex(np.cos(-ph * dx), np.sin(-ph * dx))
+                v = complex(np.cos(ph * x0), np.sin(ph * x0))
+                for n in range(n_c):
+                    V[j, n] = v
+                    v *= rr
+            for i in range(n_k):
+                for j in range(n_k):
+                    s = 0.0 + 0.0j
+                    for n in range(n_c):
+                        s += np.conj(V[i, n]) * V[j, n]
+                    G[i, j] = s
+                s = 0.0 + 0.0j
+                for n in range(n_c):
+                    s += np.conj(V[i, n]) * x[f, n]
+                b[i] = s
+            for i in range(n_k):
+                G[i, i] += 1e-9 * n_c  # loading
+            _solve_small(G, b, a)
+            for n in range(n_c):
+                s = x[f, n]
+                for j in range(n_k):
+                    s -= V[j, n] * a[j]
+                r[n] = s
+            for j in range(n_k):
+                amp[f, j] = a[j]
+                for n in range(n_c):
+                    J[j, n] = -a[j] * complex(0.0, kk * (x0 - n * dx)) * V[j, n]
+            for i in range(n_k):
+                for j in range(n_k):
+                    s = 0.0 + 0.0j
+                    for n in range(n_c):
+                        s += np.conj(J[i, n]) * J[j, n]
+                    hess[f, i, j] = s.real
+                s = 0.0 + 0.0j
+                for n in range(n_c):
+                    s += np.conj(J[i, n]) * r[n]
+                grad[f, i] = s.real
+
+
+@njit(cache=True, parallel=True)
+def subtract_plane_waves(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, amp: np.ndarray,
+                         x0: float, dx: float, c: float, out: np.ndarray) -> None:
+    """out = X − Σ_k amp[:, k] v_k: remove plane waves (direction cosines ``u`` (K,),
+    amplitudes ``amp`` (F, K)) from element spectra ``x`` (F, C), elements fore → aft."""
+    n_f, n_c = x.shape
+    for f in prange(n_f):
+        kk = TWO_PI * freqs[f] / c
+        for n in range(n_c):
+            out[f, n] = x[f, n]
+        for j in range(u.shape[0]):
+            ph = kk * u[j]
+            r = complex(np.cos(-ph * dx), np.sin(-ph * dx))
+            v = complex(np.cos(ph * x0), np.sin(ph * x0)) * amp[f, j]
+            for n in range(n_c):
+                out[f, n] -= v
+                v *= r
+
+
+@njit(cache=True)
+def band_power_on_grid(p: np.ndarray, k0: np.ndarray, w1: np.ndarray, out: np.ndarray) -> None:
+    """Σ_f of per-bin beam powers ``p`` (F, n_pad) interpolated linearly at fractional cells
+    ``k0 + w1`` (F, G) (cells taken modulo n_pad): the band's beam power on a common grid of
+    directions (G,)."""
+    n_f, n_pad = p.shape
+    n_g = out.shape[0]
+    for g in range(n_g):
+        out[g] = 0.0
+    for f in range(n_f):
+        for g in range(n_g):
+            i0 = k0[f, g] % n_pad
+            i1 = (i0 + 1) % n_pad
+            out[g] += (1.0 - w1[f, g]) * p[f, i0] + w1[f, g] * p[f, i1]

@@ -42,29 +42,26 @@ def joint_fit(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c:
     """Least-squares fit of K plane waves over a band: one direction per wave, one complex
     amplitude per wave and bin (variable projection, Gauss-Newton on the directions).
 
-    Minimises Σ_f ||X_f − Σ_j a_{f,j} v_f(u_j)||², v_f(u)_n = exp(+j2π f x_n u / c). ``u`` (K,)
-    starting direction cosines. Each step solves Σ_f Re(J_fᴴJ_f) Δu = −Σ_f Re(J_fᴴ r_f) with
-    ∂r_f/∂u_j = −a_{f,j} (j 2π f x / c) ⊙ v_f(u_j), the step limited to ``max_step``
-    beamwidths at the band centre. Returns ``(u, A)`` with A (F, K).
+    Minimises Σ_f ||X_f − Σ_j a_{f,j} v_f(u_j)||², v_f(u)_n = exp(+j2π f x_n u / c), for a
+    uniform line ``x`` (fore → aft). ``u`` (K,) starting direction cosines. Each step solves
+    Σ_f Re(J_fᴴJ_f) Δu = −Σ_f Re(J_fᴴ r_f) with ∂r_f/∂u_j = −a_{f,j} (j 2π f x / c) ⊙ v_f(u_j)
+    (kernel :func:`~arrayproc.kernels.synthetic.plane_wave_fit`), the step limited to
+    ``max_step`` beamwidths at the band centre. Returns ``(u, A)`` with A (F, K).
     """
-    k = 2.0 * np.pi * freqs / c  # (F,)
+    n_f, n_k = X.shape[0], u.size
+    x0, dx = float(x[0]), float(x[0] - x[1]) if x.size > 1 else 1.0
     bw = c / (np.median(freqs) * np.ptp(x) + 1e-12)
-    eye = np.eye(u.size)
-    u = u.astype(float).copy()
+    u = np.asarray(u, float).copy()
+    A = np.empty((n_f, n_k), np.complex128)
+    H = np.empty((n_f, n_k, n_k))
+    g = np.empty((n_f, n_k))
     for it in range(iters + 1):
-        V = np.exp(1j * (k[:, None, None] * x[None, :, None]) * u[None, None, :])  # (F, C, K)
-        G = np.einsum("fck,fcl->fkl", V.conj(), V)
-        G += 1e-9 * np.trace(G, axis1=1, axis2=2).real[:, None, None] * eye[None]
-        rhs = np.einsum("fck,fc->fk", V.conj(), X)
-        A = np.linalg.solve(G, rhs[..., None])[..., 0]
+        ks.plane_wave_fit(X, freqs, u, x0, dx, c, A, H, g)
         if it == iters:
             break
-        r = X - np.einsum("fck,fk->fc", V, A)
-        J = -(1j * k[:, None, None] * x[None, :, None]) * V * A[:, None, :]
-        H = np.einsum("fck,fcl->kl", J.conj(), J).real
-        H += 1e-9 * np.trace(H) * eye
-        g = np.einsum("fck,fc->k", J.conj(), r).real
-        du = -np.linalg.solve(H, g)
+        Hs = H.sum(0)
+        Hs += 1e-9 * np.trace(Hs) * np.eye(n_k)
+        du = -np.linalg.solve(Hs, g.sum(0))
         u = np.clip(u + np.clip(np.nan_to_num(du), -max_step * bw, max_step * bw), -1.0, 1.0)
     return u, A
 
@@ -72,7 +69,7 @@ def joint_fit(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c:
 def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: float,
                max_sources: int = 3, stop_db: float = 3.0,
                sector: tuple[float, float] | None = None, keep_sources: int = 2,
-               oversample: int = 8, grid: int = 0, fit_iters: int = 4
+               oversample: int = 4, grid: int = 0, fit_iters: int = 2
                ) -> tuple[np.ndarray, list[dict]]:
     """Remove the loudest plane waves of a band from one snapshot's element spectra.
 
@@ -112,24 +109,20 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
     fpos = np.maximum(freqs, 1e-12)
     # Cell index (fractional) of each grid direction in each bin's scan: k = u n_pad f δx / c.
     kf = ug[None, :] * (n_pad * fpos * dx / c)[:, None]
-    k0 = np.floor(kf).astype(int)
+    k0 = np.floor(kf).astype(np.int64)
     w1 = kf - k0
-    i0, i1 = k0 % n_pad, (k0 + 1) % n_pad
-    rows = np.arange(n_f)[:, None]
     u_lo, u_hi = (-1.0, 1.0) if sector is None else (np.cos(np.deg2rad(sector[1])),
                                                      np.cos(np.deg2rad(sector[0])))
     bw = c / (np.median(fpos) * n_c * dx)  # beamwidth in u at the band centre
 
+    bgrid = np.empty(n_g)
+
     def band_power(R: np.ndarray) -> np.ndarray:
-        y = fft.ifft(R, n=n_pad, axis=1) * n_pad  # Σ_n R_n exp(+j2π n k / n_pad)
-        p = (y.real**2 + y.imag**2) / n_c
-        return ((1 - w1) * p[rows, i0] + w1 * p[rows, i1]).sum(0)  # (n_g,)
-
-    y = np.empty(n_f, np.complex128)
-
-    def power_at(R: np.ndarray, u: float) -> float:
-        ks.beam_at(R, freqs, np.full(n_f, u), float(x[0]), dx, c, y)
-        return float((y.real**2 + y.imag**2).sum() / n_c)
+        # Σ_n R_n exp(+j2π n k / n_pad) = n_pad · ifft (single precision is plenty here)
+        y = fft.ifft(R.astype(np.complex64), n=n_pad, axis=1)
+        p = (y.real**2 + y.imag**2).astype(np.float64) * (n_pad**2 / n_c)
+        ks.band_power_on_grid(p, k0, w1, bgrid)
+        return bgrid.copy()
 
     us: list[float] = []
     remove: list[bool] = []
@@ -152,14 +145,12 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
         g = int(np.argmax(np.where(allowed, B, -np.inf)))
         if not B[g] > noise * 10 ** (stop_db / 10.0):
             break
-        # Refine: successive parabolas on the exact band power, from a fifth of a grid step.
-        u, h = ug[g], 0.2 * (ug[1] - ug[0])
-        for _ in range(6):
-            p = [power_at(R, float(np.clip(u + d * h, -1, 1))) for d in (-1.0, 0.0, 1.0)]
-            den = p[0] - 2 * p[1] + p[2]
+        # Start from a parabola through the grid cells around the peak; joint_fit refines.
+        u = ug[g]
+        if 0 < g < n_g - 1:
+            den = B[g - 1] - 2 * B[g] + B[g + 1]
             if den < 0:
-                u = float(np.clip(u + np.clip(0.5 * (p[0] - p[2]) / den, -1.0, 1.0) * h, -1, 1))
-            h *= 0.4
+                u += float(np.clip(0.5 * (B[g - 1] - B[g + 1]) / den, -0.5, 0.5)) * (ug[1] - ug[0])
         inside = u_lo - 1e-12 <= u <= u_hi + 1e-12
         is_removed = inside and n_removed < max_sources
         n_removed += is_removed
@@ -169,15 +160,14 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
         snrs.append(float(10 * np.log10(B[g] / noise)))
         u_fit, A = joint_fit(X, freqs, x, np.array(us), c, iters=fit_iters)
         us = list(u_fit)
-        V = np.exp(1j * (2 * np.pi * freqs / c)[:, None, None] * x[None, :, None]
-                   * u_fit[None, None, :])
-        R = X - np.einsum("fck,fk->fc", V, A)
+        R = np.empty_like(X)
+        ks.subtract_plane_waves(X, freqs, u_fit, A, float(x[0]), dx, c, R)
     if not any(remove):
         return X.astype(np.complex64), []
     rm = np.array(remove)
-    V = np.exp(1j * (2 * np.pi * freqs / c)[:, None, None] * x[None, :, None]
-               * np.array(us)[None, None, rm])
-    out = X - np.einsum("fck,fk->fc", V, A[:, rm])
+    out = np.empty_like(X)
+    ks.subtract_plane_waves(X, freqs, np.array(us)[rm], np.ascontiguousarray(A[:, rm]),
+                            float(x[0]), dx, c, out)
     removed = [{"cone_deg": float(np.rad2deg(np.arccos(us[j]))), "amp": A[:, j],
                 "snr_db": snrs[j]} for j in np.flatnonzero(rm)]
     return out.astype(np.complex64), removed

@@ -173,7 +173,10 @@ class ETAM(_SyntheticAperture):
         """Ψ_b(f) of eq. (2.53) from the elements both snapshots share."""
         h = np.deg2rad(prev["heading"])
         moved = float((cur["pos"] - prev["pos"]) @ np.array([np.sin(h), np.cos(h)]))
-        shift = int(round(moved / cur["dx"]))
+        # Half-integer shifts are the rule, not the exception: eq. (2.52) moves the array by
+        # (N_H − 1)/2 elements. Round halves up (N_H/2, as the thesis pairs them), with a
+        # tolerance so that nav rounding cannot flip the choice between snapshots.
+        shift = int(np.floor(moved / cur["dx"] + 0.5 + 1e-6))
         n_c = cur["x"].shape[1]
         if not 0 < shift < n_c:
             if not getattr(self, "_warned", False):
@@ -184,3 +187,50 @@ class ETAM(_SyntheticAperture):
         psi = np.empty(freqs.size)
         ks.etam_phase(prev["x"], cur["x"], shift, self.q_bins, psi)
         return psi
+
+
+def etam_reference(spectra: list[np.ndarray], freqs: np.ndarray, x: np.ndarray,
+                   disp_step: float, shift: int, n_s: int, cone: np.ndarray, c: float,
+                   q: int = 5) -> list[np.ndarray]:
+    """Plain-numpy ETAM (eqs. 2.33-2.35 and 2.53-2.54) for tests and benchmarks.
+
+    ``spectra``: (F, C) element spectra of successive snapshots (elements fore → aft,
+    body x = ``x``), the array moving ``disp_step`` m (``shift`` elements) per snapshot.
+    Returns the synthetic beams (F, B) of every full window of ``n_s`` snapshots.
+    """
+    u = np.cos(np.deg2rad(cone))
+    xc = x - x.mean()
+    n_c = xc.size
+    kern = np.ones(q)
+
+    def smooth(v: np.ndarray) -> np.ndarray:  # sum over the q bins centred on each bin
+        return np.apply_along_axis(lambda col: np.convolve(col, kern, "same"), 0, v)
+    outs: list[np.ndarray] = []
+    beams: list[np.ndarray] = []
+    phis: list[np.ndarray] = []
+    prev = None
+    for X in spectra:
+        sub = np.empty((freqs.size, u.size), complex)
+        for a in range(0, freqs.size, 256):  # steering matrices in slabs of bins
+            f = freqs[a:a + 256]
+            steer = np.exp(-2j * np.pi * f[:, None, None] * xc[None, None, :] * u[None, :, None]
+                           / c)
+            sub[a:a + 256] = np.einsum("fbc,fc->fb", steer, X[a:a + 256])
+        if prev is None:
+            phi = np.zeros(freqs.size)
+        else:
+            a_, b_ = prev[:, : n_c - shift], X[:, shift:]
+            prod = a_ * b_.conj()
+            rho = np.abs(smooth(prod)) / np.sqrt(smooth(np.abs(a_) ** 2)
+                                                 * smooth(np.abs(b_) ** 2))
+            phi = phis[-1] + np.angle((rho * prod).sum(1))
+        prev = X
+        beams.append(sub)
+        phis.append(phi)
+        if len(beams) >= n_s:
+            p0 = phis[-n_s]
+            outs.append(sum(b * np.exp(1j * (p - p0))[:, None]
+                            * np.exp(-2j * np.pi * freqs[:, None] * (k * disp_step) * u[None, :]
+                                     / c)
+                            for k, (b, p) in enumerate(zip(beams[-n_s:], phis[-n_s:]))))
+    return outs
