@@ -70,8 +70,8 @@ def unpack_beams(z: np.ndarray, uidx: np.ndarray, sign: np.ndarray, y: np.ndarra
     nf = z.shape[0]
     ns = z.shape[1] // 2
     nb = uidx.shape[0]
-    for f in range(nf):
-        for s in range(ns):
+    for s in range(ns):  # s outer: y[s, f_off:f_off+nf, :] is one contiguous run of memory
+        for f in range(nf):
             for b in range(nb):
                 u = uidx[b]
                 sg = sign[b]
@@ -197,8 +197,8 @@ def unpack_fold(za: np.ndarray, zb: np.ndarray, runs: np.ndarray, y: np.ndarray,
     nf = za.shape[0]
     ns = za.shape[1] // 2
     yr = y.view(np.float32)
-    for f in range(nf):
-        for s in range(ns):
+    for s in range(ns):  # s outer: y[s, f_off:f_off+nf, :] is one contiguous run of memory
+        for f in range(nf):
             out = yr[s, f_off + f]
             ar = za[f, s]
             ai = za[f, ns + s]

@@ -191,7 +191,7 @@ class CBF(Stage):
         "shading": Param("str", "none", "array shading", choices=SHADINGS),
         "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB",
                              check=positive),
-        "batch": Param("int", 32, "snapshots per GEMM batch (and per output block)",
+        "batch": Param("int", 16, "snapshots per GEMM batch (and per output block)",
                        check=positive),
         "threads": Param("int", 0, "worker threads over frequency bins (0: all cores)"),
     }
