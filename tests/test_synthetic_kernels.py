@@ -113,3 +113,41 @@ def test_beam_at_matches_numpy(seed, n_f, n_c):
     xn = x0 - dx * np.arange(n_c)
     ref = (x * np.exp(-2j * np.pi * freqs[:, None] * xn[None] * u[:, None] / 1500.0)).sum(1)
     assert np.allclose(out, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
+
+
+def _signatures(freqs, u, x0, dx, n_c, c=1500.0):
+    xn = x0 - dx * np.arange(n_c)
+    return np.exp(2j * np.pi * freqs[:, None, None] * u[None, :, None] * xn[None, None, :] / c)
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10**6), n_f=st.integers(1, 50), n_c=st.integers(4, 40),
+       n_k=st.integers(1, 4))
+def test_plane_wave_fit_and_removal_match_numpy(seed, n_f, n_c, n_k):
+    rng = np.random.default_rng(seed)
+    freqs = rng.uniform(50, 500, n_f)
+    u = np.sort(rng.uniform(-1, 1, n_k))
+    u += np.arange(n_k) * 0.3  # keep the waves apart so the systems are well conditioned
+    u = np.clip(u, -1, 1)
+    x0, dx = 0.5 * (n_c - 1) * 0.5, 0.5
+    V = _signatures(freqs, u, x0, dx, n_c)  # (F, K, C)
+    X = cgauss(rng, (n_f, n_c))
+    A = np.empty((n_f, n_k), complex)
+    H = np.empty((n_f, n_k, n_k))
+    g = np.empty((n_f, n_k))
+    ks.plane_wave_fit(X, freqs, u, x0, dx, 1500.0, A, H, g)
+    remove = rng.random(n_k) < 0.5
+    out = np.empty_like(X)
+    A2 = np.empty_like(A)
+    ks.remove_plane_waves(X, freqs, u, remove, x0, dx, 1500.0, out, A2)
+    xn = x0 - dx * np.arange(n_c)
+    for f in range(n_f):
+        M = V[f].T  # (C, K)
+        a = np.linalg.lstsq(M, X[f], rcond=None)[0]
+        assert np.allclose(A[f], a, atol=1e-6 * (1 + np.abs(a).max()))
+        assert np.allclose(A2[f], a, atol=1e-6 * (1 + np.abs(a).max()))
+        r = X[f] - M @ a
+        J = -(a[None, :] * (2j * np.pi * freqs[f] / 1500.0 * xn)[:, None] * M)
+        assert np.allclose(H[f], (J.conj().T @ J).real, rtol=1e-6, atol=1e-9)
+        assert np.allclose(g[f], (J.conj().T @ r).real, rtol=1e-6, atol=1e-6)
+        assert np.allclose(out[f], X[f] - M[:, remove] @ a[remove], atol=1e-6)

@@ -69,8 +69,8 @@ def joint_fit(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c:
 def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: float,
                max_sources: int = 3, stop_db: float = 3.0,
                sector: tuple[float, float] | None = None, keep_sources: int = 2,
-               oversample: int = 4, grid: int = 0, fit_iters: int = 2
-               ) -> tuple[np.ndarray, list[dict]]:
+               oversample: int = 4, grid: int = 0, fit_iters: int = 2,
+               detect_bins: int = 1024) -> tuple[np.ndarray, list[dict]]:
     """Remove the loudest plane waves of a band from one snapshot's element spectra.
 
     Each round beamforms the residual over the band (the sum over bins of the beam powers),
@@ -94,6 +94,9 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
     oversample, grid : each bin is scanned by a zero-padded spatial FFT of ``oversample``·C
         points (at least 256) and the powers interpolated onto ``grid`` directions uniform in
         cos θ (default 4·C + 1) before summing over the band.
+    detect_bins : directions are detected and fitted on at most this many bins spread evenly
+        over the band (plenty for a band-wide direction); the amplitudes are then solved in
+        every bin.
 
     Returns
     -------
@@ -101,7 +104,9 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
     removed : one dict per removed wave: ``cone_deg``, ``amp`` (F,) complex amplitudes at the
         elements, ``snr_db`` (band beam power over the noise estimate).
     """
-    X = np.asarray(X, np.complex128)
+    X_all, freqs_all = np.asarray(X, np.complex128), np.asarray(freqs, float)
+    stride = max(1, -(-X_all.shape[0] // max(1, detect_bins)))
+    X, freqs = np.ascontiguousarray(X_all[::stride]), np.ascontiguousarray(freqs_all[::stride])
     n_f, n_c = X.shape
     n_pad = max(256, int(2 ** np.ceil(np.log2(oversample * n_c))))
     n_g = grid or 4 * n_c + 1
@@ -163,11 +168,13 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
         R = np.empty_like(X)
         ks.subtract_plane_waves(X, freqs, u_fit, A, float(x[0]), dx, c, R)
     if not any(remove):
-        return X.astype(np.complex64), []
+        return X_all.astype(np.complex64), []
     rm = np.array(remove)
-    out = np.empty_like(X)
-    ks.subtract_plane_waves(X, freqs, np.array(us)[rm], np.ascontiguousarray(A[:, rm]),
-                            float(x[0]), dx, c, out)
+    u_all = np.array(us)
+    # amplitudes in every bin at the fitted directions, and the removal
+    A = np.empty((freqs_all.size, u_all.size), np.complex128)
+    out = np.empty_like(X_all)
+    ks.remove_plane_waves(X_all, freqs_all, u_all, rm, float(x[0]), dx, c, out, A)
     removed = [{"cone_deg": float(np.rad2deg(np.arccos(us[j]))), "amp": A[:, j],
                 "snr_db": snrs[j]} for j in np.flatnonzero(rm)]
     return out.astype(np.complex64), removed
