@@ -196,23 +196,25 @@ def unpack_fold(za: np.ndarray, zb: np.ndarray, runs: np.ndarray, y: np.ndarray,
     ``runs`` from :func:`beam_runs`."""
     nf = za.shape[0]
     ns = za.shape[1] // 2
-    yr = y.view(np.float32)
+    nu = za.shape[2]
+    tp = np.empty(nu, np.complex64)  # Y(+u) of one (snapshot, bin), then Y(−u)
+    tm = np.empty(nu, np.complex64)
     for s in range(ns):  # s outer: y[s, f_off:f_off+nf, :] is one contiguous run of memory
         for f in range(nf):
-            out = yr[s, f_off + f]
             ar = za[f, s]
             ai = za[f, ns + s]
             br = zb[f, s]
             bi = zb[f, ns + s]
+            for u in range(nu):  # contiguous, vectorisable
+                tp[u] = complex(ar[u] + bi[u], ai[u] - br[u])
+                tm[u] = complex(ar[u] - bi[u], ai[u] + br[u])
+            out = y[s, f_off + f]
             for r in range(runs.shape[0]):
-                b0, n, u0, du, sg = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
-                if sg > 0:
+                b0, n, u0, du = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+                src = tp if runs[r, 4] > 0 else tm
+                if du == 1:
                     for m in range(n):
-                        u = u0 + m * du
-                        out[2 * (b0 + m)] = ar[u] + bi[u]
-                        out[2 * (b0 + m) + 1] = ai[u] - br[u]
+                        out[b0 + m] = src[u0 + m]
                 else:
                     for m in range(n):
-                        u = u0 + m * du
-                        out[2 * (b0 + m)] = ar[u] - bi[u]
-                        out[2 * (b0 + m) + 1] = ai[u] + br[u]
+                        out[b0 + m] = src[u0 - m]
