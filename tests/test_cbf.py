@@ -204,12 +204,12 @@ def test_complex_baseband_input_equals_real_path(rng):
 # -- kernels against numpy references ------------------------------------------------------------
 def test_kernels_against_numpy(rng):
     s_n, n_ch, nb = 3, 5, 7
-    spec = (rng.standard_normal((s_n, 9, n_ch)) + 1j * rng.standard_normal((s_n, 9, n_ch)))
+    spec = (rng.standard_normal((s_n, n_ch, 9)) + 1j * rng.standard_normal((s_n, n_ch, 9)))
     spec = spec.astype(np.complex64)
     x2 = np.empty((4, 2 * s_n, n_ch), np.float32)
     kb.pack_bins(spec, 2, x2)
-    assert np.array_equal(x2[:, :s_n], spec[:, 2:6].real.transpose(1, 0, 2))
-    assert np.array_equal(x2[:, s_n:], spec[:, 2:6].imag.transpose(1, 0, 2))
+    assert np.array_equal(x2[:, :s_n], spec[:, :, 2:6].real.transpose(2, 0, 1))
+    assert np.array_equal(x2[:, s_n:], spec[:, :, 2:6].imag.transpose(2, 0, 1))
     freqs = np.array([10.0, 20.0, 35.0, 40.0])
     delays = rng.uniform(-1e-3, 1e-3, (4, n_ch))
     weights = rng.uniform(0.5, 1.5, n_ch)
@@ -224,7 +224,7 @@ def test_kernels_against_numpy(rng):
     z = np.matmul(x2, g)
     y = np.zeros((s_n, 6, nb), np.complex64)
     kb.unpack_beams(z, uidx, sign, y, 1)
-    xc = spec[:, 2:6].transpose(1, 0, 2)  # (nf, S, C)
+    xc = spec[:, :, 2:6].transpose(2, 0, 1)  # (nf, S, C)
     wc = ref[:, :, uidx]  # (nf, C, B)
     wc[:, :, sign < 0] = np.conj(wc[:, :, sign < 0])
     want = np.einsum("fsc,fcb->sfb", xc, wc)
@@ -328,14 +328,14 @@ def test_folded_fast_path_equals_general_path(rng, monkeypatch, n_h, shading):
 
 def test_fold_kernels_against_numpy(rng):
     s_n, n_ch, nf = 3, 5, 4
-    spec = (rng.standard_normal((s_n, 8, n_ch)) + 1j * rng.standard_normal((s_n, 8, n_ch)))
+    spec = (rng.standard_normal((s_n, n_ch, 8)) + 1j * rng.standard_normal((s_n, n_ch, 8)))
     spec = spec.astype(np.complex64)
     pi = np.array([0, 1, 2], np.int64)
     pj = np.array([4, 3, 2], np.int64)  # element 2 is the centre
     xs = np.empty((nf, 2 * s_n, 3), np.float32)
     xd = np.empty((nf, 2 * s_n, 3), np.float32)
     kb.pack_fold(spec, 1, pi, pj, xs, xd)
-    x = spec[:, 1:5].transpose(1, 0, 2)  # (nf, S, C)
+    x = spec[:, :, 1:5].transpose(2, 0, 1)  # (nf, S, C)
     ssum = x[:, :, pi] + np.where(pi == pj, 0, 1) * x[:, :, pj]
     sdif = np.where(pi == pj, 0, 1) * (x[:, :, pi] - x[:, :, pj])
     assert np.allclose(xs[:, :s_n], ssum.real) and np.allclose(xs[:, s_n:], ssum.imag)

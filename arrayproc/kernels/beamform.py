@@ -27,15 +27,29 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
+def transpose_into(x: np.ndarray, out: np.ndarray) -> None:
+    """``out[c, t] = x[t, c]`` for x (T, C) into out (C, T) (a view may be given), in tiles
+    so that both sides stay in cache."""
+    nt, nc = x.shape
+    tile = 64
+    for t0 in range(0, nt, tile):
+        t1 = min(nt, t0 + tile)
+        for c in range(nc):
+            for t in range(t0, t1):
+                out[c, t] = x[t, c]
+
+
+@njit(cache=True, nogil=True)
 def pack_bins(spec: np.ndarray, first_bin: int, out: np.ndarray) -> None:
-    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (S, F, C) complex into
+    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (S, C, F) complex into
     ``out`` (nf, 2S, C) float32: rows 0..S-1 the real parts, rows S..2S-1 the imaginary."""
     nf, s2, nc = out.shape
     ns = s2 // 2
-    for f in range(nf):
-        for s in range(ns):
-            for c in range(nc):
-                v = spec[s, first_bin + f, c]
+    for s in range(ns):
+        for c in range(nc):
+            row = spec[s, c]
+            for f in range(nf):
+                v = row[first_bin + f]
                 out[f, s, c] = v.real
                 out[f, ns + s, c] = v.imag
 
@@ -129,23 +143,24 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
 def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
               out_s: np.ndarray, out_d: np.ndarray) -> None:
     """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of
-    ``spec`` (S, F, C): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
+    ``spec`` (S, C, F): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
     in rows S..2S-1. A centre element (pi == pj) gives S = X, D = 0."""
     nf, s2, nk = out_s.shape
     ns = s2 // 2
-    for f in range(nf):
-        for s in range(ns):
-            row = spec[s, first_bin + f]
-            for k in range(nk):
-                i, j = pi[k], pj[k]
-                a = row[i]
+    for s in range(ns):
+        for k in range(nk):
+            i, j = pi[k], pj[k]
+            ri = spec[s, i]
+            rj = spec[s, j]
+            for f in range(nf):
+                a = ri[first_bin + f]
                 if i == j:
                     out_s[f, s, k] = a.real
                     out_s[f, ns + s, k] = a.imag
                     out_d[f, s, k] = 0.0
                     out_d[f, ns + s, k] = 0.0
                 else:
-                    b = row[j]
+                    b = rj[first_bin + f]
                     out_s[f, s, k] = a.real + b.real
                     out_s[f, ns + s, k] = a.imag + b.imag
                     out_d[f, s, k] = a.real - b.real

@@ -276,15 +276,16 @@ class CBF(Stage):
 
     # -- compute -----------------------------------------------------------------------
     def _plan(self, n_ch: int):
-        """This stage's FFT plan: (batch, nfft, C) frames, transform along axis 1. Owned by the
-        stage (not the shared plan cache): frames wait in its input buffer across blocks, so
-        another CBF stage of the same shape in the chain must not share it."""
+        """This stage's FFT plan: (batch, C, nfft) frames, each channel's samples contiguous,
+        transform along the last axis (about 1.8x faster than along a strided axis here).
+        Owned by the stage (not the shared plan cache): frames wait in its input buffer across
+        blocks, so another CBF stage of the same shape in the chain must not share it."""
         kind, dt = ("fft", np.complex64) if self._complex else ("rfft", np.float32)
         key = (kind, self.batch, self.nfft, n_ch)
         plans = self.__dict__.setdefault("_plans", {})
         if key not in plans:
             plans.clear()
-            plans[key] = fft.BufferedPlan(kind, (self.batch, self.nfft, n_ch), dt, axis=1)
+            plans[key] = fft.BufferedPlan(kind, (self.batch, n_ch, self.nfft), dt, axis=2)
         return plans[key]
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
@@ -293,19 +294,19 @@ class CBF(Stage):
         for a in range(0, frames.shape[0], self.batch):
             part = frames[a:a + self.batch]
             plan = self._plan(frames.shape[2])
-            np.multiply(part, self._win.astype(plan.input.dtype)[None, :, None],
+            np.multiply(part.transpose(0, 2, 1), self._win.astype(plan.input.dtype),
                         out=plan.input[:part.shape[0]])
             out.append(self._beamform_filled(plan, part.shape[0]).copy())
         return np.concatenate(out)
 
     def _beamform_filled(self, plan, s_n: int) -> np.ndarray:
         """Beams of the first ``s_n`` windowed frames already in ``plan.input``."""
-        n_ch = plan.input.shape[2]
+        n_ch = plan.input.shape[1]
         n_thr = self.threads or (os.cpu_count() or 1)
-        spec = plan()  # (batch, F_all, C), owned by the plan; rows past s_n are ignored
+        spec = plan()  # (batch, C, F_all); rows past s_n are ignored
         first = int(self._bins[0])
         if not self._contig:
-            spec, first = np.ascontiguousarray(spec[:, self._bins, :]), 0
+            spec, first = np.ascontiguousarray(spec[:, :, self._bins]), 0
         nf = self._bins.size
         nb = self._uidx.size
         y = self._out_buffer((s_n, nf, nb))
@@ -412,24 +413,32 @@ class CBF(Stage):
                 buf = None
             self._prepare(b)
             plan = self._plan(b.data.shape[1])
-            win = self._win.astype(plan.input.dtype)[:, None]
+            win = self._win.astype(plan.input.dtype)
             last = b
+            # channel-major copy of the block after the kept tail (each sample transposed
+            # once, not once per frame)
             x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
             s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
-            if buf is None or buf_start + buf.shape[0] != s0:  # start, or a gap in the stream
-                buf, buf_start = x, s0
+            if buf is None or buf_start + buf.shape[1] != s0:  # start, or a gap in the stream
+                keep = 0
+                buf_start = s0
                 nxt = max(nxt, -(-s0 // hop) * hop)
             else:
-                buf = np.concatenate([buf, x])
-            while nxt + nfft <= buf_start + buf.shape[0]:
+                keep = buf.shape[1]
+            new = np.empty((x.shape[1], keep + x.shape[0]), plan.input.dtype)
+            if keep:
+                new[:, :keep] = buf
+            kb.transpose_into(x.astype(plan.input.dtype, copy=False), new[:, keep:])
+            buf = new
+            while nxt + nfft <= buf_start + buf.shape[1]:
                 off = nxt - buf_start
-                np.multiply(buf[off:off + nfft], win, out=plan.input[len(starts)])
+                np.multiply(buf[:, off:off + nfft], win, out=plan.input[len(starts)])
                 starts.append(nxt)
                 nxt += hop
                 if len(starts) == self.batch:
                     yield emit()
-            drop = min(max(0, nxt - buf_start), buf.shape[0])
-            buf = buf[drop:]
+            drop = min(max(0, nxt - buf_start), buf.shape[1])
+            buf = buf[:, drop:]
             buf_start += drop
         if starts and last is not None:
             yield emit()
