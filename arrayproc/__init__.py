@@ -1,4 +1,4 @@
-"""arrayproc: hydrophone-array processing from recordings to bearings, delays, contacts and tracks."""
+"""arrayproc: hydrophone-array processing, from recordings to bearings, delays and tracks."""
 
 from importlib.metadata import PackageNotFoundError, version
 

@@ -57,46 +57,40 @@ def subaperture_beams(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float
 
 
 @njit(cache=True, parallel=True)
-def combine_subapertures(beams: np.ndarray, phase: np.ndarray, disp: np.ndarray,
-                         freqs: np.ndarray, u: np.ndarray, c: float, out: np.ndarray) -> None:
+def combine_subapertures(beams: np.ndarray, order: np.ndarray, phase: np.ndarray,
+                         disp: np.ndarray, freqs: np.ndarray, u: np.ndarray, c: float,
+                         out: np.ndarray) -> None:
     """Synthetic-aperture beams from sub-aperture beams, thesis eqs. (2.33)-(2.35).
 
     Y(θ, f) = Σ_s B_s(θ, f) · exp(j Φ_s(f)) · exp(−j 2π f D_s u / c)
 
-    ``beams`` (S, F, B) complex64 sub-aperture beams, ``phase`` (S, F) the inter-snapshot
-    phase correction Φ_s (rad; −2π f (t_s − t_1) for ideal PSAS, the accumulated ETAM
-    correction of eq. (2.53) otherwise), ``disp`` (S,) along-track displacement D_s of each
-    snapshot's array centre from the first (m), ``freqs`` (F,) Hz, uniformly spaced, ``u`` (B,)
-    = cos θ, ``out`` (F, B) complex64. The displacement steering is advanced along frequency by
-    a complex recurrence (one multiply per cell instead of a sine and cosine).
+    ``beams`` (R, B, F) complex64, a ring of sub-aperture beams (beam-major so that the
+    frequency runs contiguously); ``order`` (S,) the ring slots of the window's snapshots;
+    ``phase`` (S, F) complex128, exp(j Φ_s(f)) — the inter-snapshot correction (−2π f
+    (t_s − t_1) for ideal PSAS, the accumulated ETAM correction of eq. (2.53) otherwise);
+    ``disp`` (S,) along-track displacement D_s of each snapshot's array centre from the first
+    (m); ``freqs`` (F,) Hz, uniformly spaced; ``u`` (B,) = cos θ; ``out`` (F, B) complex64.
+    The displacement steering advances along frequency by a complex recurrence, re-anchored
+    every 256 bins against rounding drift.
     """
-    n_s, n_f, n_b = beams.shape
+    n_s = order.shape[0]
+    n_b = u.shape[0]
+    n_f = freqs.shape[0]
     df = freqs[1] - freqs[0] if n_f > 1 else 0.0
     for b in prange(n_b):
-        acc_re = np.zeros(n_f)
-        acc_im = np.zeros(n_f)
+        acc = np.zeros(n_f, np.complex128)
         for s in range(n_s):
+            slot = order[s]
             a = -TWO_PI * disp[s] * u[b] / c
-            e_re = np.cos(a * freqs[0])
-            e_im = np.sin(a * freqs[0])
-            st_re = np.cos(a * df)
-            st_im = np.sin(a * df)
+            step = complex(np.cos(a * df), np.sin(a * df))
+            e = 1.0 + 0.0j
             for f in range(n_f):
-                if f % 256 == 0:  # re-anchor the recurrence against rounding drift
-                    e_re = np.cos(a * freqs[f])
-                    e_im = np.sin(a * freqs[f])
-                p_re = np.cos(phase[s, f])
-                p_im = np.sin(phase[s, f])
-                w_re = e_re * p_re - e_im * p_im
-                w_im = e_re * p_im + e_im * p_re
-                v = beams[s, f, b]
-                acc_re[f] += v.real * w_re - v.imag * w_im
-                acc_im[f] += v.real * w_im + v.imag * w_re
-                t = e_re * st_re - e_im * st_im
-                e_im = e_re * st_im + e_im * st_re
-                e_re = t
+                if f % 256 == 0:
+                    e = complex(np.cos(a * freqs[f]), np.sin(a * freqs[f]))
+                acc[f] += beams[slot, b, f] * (e * phase[s, f])
+                e *= step
         for f in range(n_f):
-            out[f, b] = complex(acc_re[f], acc_im[f])
+            out[f, b] = acc[f]
 
 
 @njit(cache=True)

@@ -88,6 +88,8 @@ class _SyntheticAperture(Stage):
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         framer = None
         window: deque[dict] = deque(maxlen=self.snapshots)
+        ring: np.ndarray | None = None  # (N_S, B, F) sub-aperture beams, reused
+        slot = 0
         index = 0
         for b in blocks:
             if b.domain == ("time", "channel"):
@@ -110,8 +112,12 @@ class _SyntheticAperture(Stage):
                 x = np.ascontiguousarray(spec.data[s][:, order])
                 sub = np.empty((freqs.size, self._u.size), np.complex64)
                 ks.subaperture_beams(x, freqs, self._u, float(x0), float(dx), float(c), sub)
+                if ring is None or ring.shape[2] != freqs.size:
+                    ring = np.empty((self.snapshots, self._u.size, freqs.size), np.complex64)
+                    slot = 0
+                ring[slot] = sub.T  # beam-major for the combination kernel
                 hd = float(spec.meta["headings"][s])
-                cur = {"x": x, "beams": sub, "t": float(spec.meta["times"][s]),
+                cur = {"x": x, "slot": slot, "t": float(spec.meta["times"][s]),
                        "t0": float(spec.meta["starts"][s]) / spec.fs,
                        "pos": np.asarray(spec.meta["positions_xy"][s], float),
                        "heading": hd, "dx": dx}
@@ -121,9 +127,10 @@ class _SyntheticAperture(Stage):
                 else:
                     cur["phi"] = np.zeros(freqs.size)
                 window.append(cur)
+                slot = (slot + 1) % self.snapshots
                 if len(window) < self.snapshots:
                     continue
-                y = self.combine(window, freqs, c)
+                y = self.combine(ring, window, freqs, c)
                 times = np.array([window[-1]["t"]])
                 yield Block(y[None], ("snapshot", "freq", "beam"), window[0]["t0"],
                             window[-1]["t0"] - window[0]["t0"] + spec.meta["nfft"] / spec.fs,
@@ -137,16 +144,17 @@ class _SyntheticAperture(Stage):
                                            "window_start": window[0]["t"]}})
                 index += 1
 
-    def combine(self, window: deque, freqs: np.ndarray, c: float) -> np.ndarray:
+    def combine(self, ring: np.ndarray, window: deque, freqs: np.ndarray,
+                c: float) -> np.ndarray:
         """Synthetic beams (F, B) of the snapshots in ``window`` (eqs. 2.33-2.35)."""
         first = window[0]
         h = np.deg2rad(first["heading"])
         fwd = np.array([np.sin(h), np.cos(h)])
-        beams = np.stack([w["beams"] for w in window])
-        phase = np.stack([w["phi"] - first["phi"] for w in window])
+        order = np.array([w["slot"] for w in window], np.int64)
+        phase = np.exp(1j * np.stack([w["phi"] - first["phi"] for w in window]))
         disp = np.array([float((w["pos"] - first["pos"]) @ fwd) for w in window])
         out = np.empty((freqs.size, self._u.size), np.complex64)
-        ks.combine_subapertures(beams, phase, disp, freqs, self._u, float(c), out)
+        ks.combine_subapertures(ring, order, phase, disp, freqs, self._u, float(c), out)
         return out
 
 
