@@ -11,6 +11,8 @@ from ._passive import find_group, open_truth_recording, robust_top
 
 #: Truth tonals are drawn while their source lies within this many degrees of the beam.
 TRUTH_GATE_DEG = 10.0
+#: Truth colours that stand out on viridis.
+OVERLAY_COLOURS = ("tab:red", "white", "tab:orange", "magenta")
 #: Bottom of the colour scale for TPSW-normalised LOFAR-grams (noise sits at 0 dB).
 TPSW_FLOOR_DB = -3.0
 
@@ -63,7 +65,8 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                     ff = np.where(near, fr[:, k], np.nan)
                     if np.all(np.isnan(ff)):
                         continue
-                    ax.plot(ff, t, ls=(0, (3, 4)), lw=1.0, alpha=0.8, color=f"C{(i + 1) % 10}",
+                    ax.plot(ff, t, ls=(0, (3, 4)), lw=1.0, alpha=0.9,
+                            color=OVERLAY_COLOURS[i % len(OVERLAY_COLOURS)],
                             label=f"truth: {name}" if k == 0 else None)
                     first = False
             if not first:
