@@ -134,23 +134,28 @@ def main() -> None:
     f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3])   # compile
     for threads in sorted({1, numba.get_num_threads()}):
         numba.set_num_threads(threads)
-        t = time.perf_counter()
+        c, t = time.process_time(), time.perf_counter()
         res = f.run_many(data.times, data.observer_pos, data.bearings_deg[:runs],
                          seeds=run_seeds(args.seed, runs, tag=9))
-        el = time.perf_counter() - t
+        el, cpu = time.perf_counter() - t, time.process_time() - c
         out[f"arrayproc_runs_per_s_{threads}thr"] = runs / el
+        out[f"arrayproc_cpu_ms_per_run_{threads}thr"] = 1e3 * cpu / runs
         print(f"arrayproc RPF, {threads} thread(s): {runs} runs in {el:.2f} s "
-              f"= {runs / el:.1f} runs/s")
+              f"= {runs / el:.1f} runs/s; CPU {1e3 * cpu / runs:.2f} ms per run")
     err_ap = sc.position_error(res.est)
 
     ss_est = np.empty((args.runs_ss, data.times.size, 4))
-    t = time.perf_counter()
+    stonesoup_run(sc, data.times[:3], data.observer_pos, data.bearings_deg[0], 100, 0)  # warm
+    c, t = time.process_time(), time.perf_counter()
     for r in range(args.runs_ss):
         ss_est[r] = stonesoup_run(sc, data.times, data.observer_pos, data.bearings_deg[r],
                                   args.particles, args.seed * 100003 + r)
-    el = time.perf_counter() - t
+    el, cpu = time.perf_counter() - t, time.process_time() - c
     out["stonesoup_runs_per_s"] = args.runs_ss / el
-    print(f"Stone Soup PF: {args.runs_ss} runs in {el:.2f} s = {args.runs_ss / el:.3f} runs/s")
+    out["stonesoup_cpu_ms_per_run"] = 1e3 * cpu / args.runs_ss
+    out["load_average_1min_end"] = os.getloadavg()[0]
+    print(f"Stone Soup PF: {args.runs_ss} runs in {el:.2f} s = {args.runs_ss / el:.3f} runs/s; "
+          f"CPU {1e3 * cpu / args.runs_ss:.1f} ms per run")
     err_ss = sc.position_error(ss_est)
     n = args.runs_ss
     tmin = data.times / 60.0
@@ -170,7 +175,10 @@ def main() -> None:
         out[f"speed_ratio_{thr}thr"] = out[f"arrayproc_runs_per_s_{thr}thr"] / out[
             "stonesoup_runs_per_s"]
         print(f"speed ratio (arrayproc {thr} thread(s) / Stone Soup): "
-              f"{out[f'speed_ratio_{thr}thr']:.0f}x")
+              f"{out[f'speed_ratio_{thr}thr']:.0f}x runs/s")
+    out["cpu_ratio_1thr"] = out["stonesoup_cpu_ms_per_run"] / out[
+        "arrayproc_cpu_ms_per_run_1thr"]
+    print(f"CPU time per run, Stone Soup / arrayproc (1 thread): {out['cpu_ratio_1thr']:.0f}x")
     print(f"RMSE over the {n} common runs, mean over 20-30 min: arrayproc "
           f"{out['mean_rmse_20_30min_arrayproc_m']:.1f} m, Stone Soup "
           f"{out['mean_rmse_20_30min_stonesoup_m']:.1f} m; final "

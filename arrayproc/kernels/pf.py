@@ -146,16 +146,6 @@ def init_polar_prior(parts, state, obs_x, obs_y, bearing0, sig_bearing, range_me
 
 
 @njit(cache=True, inline="always")
-def _wrap(a):
-    """Wrap an angle difference in (−π, 3π) to [−π, π) without fmod."""
-    while a >= math.pi:
-        a -= 2.0 * math.pi
-    while a < -math.pi:
-        a += 2.0 * math.pi
-    return a
-
-
-@njit(cache=True, inline="always")
 def _tl_interp(r, r0, dr, tl):
     """Linear interpolation of a uniform-grid TL profile; held below the first range and
     continued by cylindrical spreading, TL(r_max) + 10 log10(r / r_max), beyond the last."""
@@ -179,7 +169,8 @@ def predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta
     Prediction (skipped when ``dt`` ≤ 0), SPL paper eqs. (4)-(6), (17):
     x ← F x + Γ ν, ν ~ N(0, σ_a² I₂) (one normal pair per particle).
     Log-likelihood up to a constant, eqs. (31)-(33): bearing term
-    −wrap(θ − atan2(dx, dy))² / 2σ_θ² (eqs. (9), (32)); level term
+    −wrap(θ − atan2(dx, dy))² / 2σ_θ² (eqs. (9), (32)), the wrapped difference computed as
+    atan2(sin θ·dy − cos θ·dx, cos θ·dy + sin θ·dx); level term
     −(l − SL(v) + TL(r))² / 2σ_l² with SL(v) = sl0 + slope·log10(v / v_ref) (eq. (12)) and TL
     linearly interpolated in range on the profile (r0, dr, tl) (eqs. (13), (16)).
     """
@@ -190,9 +181,11 @@ def predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta
     sl0 = sl_par[0]
     half_slope = 0.5 * sl_par[1]
     vref2 = sl_par[2] * sl_par[2]
+    s_th = math.sin(theta)
+    c_th = math.cos(theta)
     llmax = -np.inf
-    for i in range(n):
-        if dt > 0.0:
+    if dt > 0.0:
+        for i in range(n):
             ax, ay = rand_normal_pair(state)
             ax *= sigma_a
             ay *= sigma_a
@@ -200,11 +193,13 @@ def predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta
             parts[i, 1] += dt * parts[i, 3] + h * ay
             parts[i, 2] += dt * ax
             parts[i, 3] += dt * ay
+    for i in range(n):
         dx = parts[i, 0] - obs_x
         dy = parts[i, 1] - obs_y
         v = 0.0
         if use_theta:
-            e = _wrap(theta - math.atan2(dx, dy))
+            # θ − atan2(dx, dy) wrapped to (−π, π], as one atan2 of the rotated vector
+            e = math.atan2(s_th * dy - c_th * dx, c_th * dy + s_th * dx)
             v -= e * e * it2
         if use_level:
             v2 = parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3]
@@ -260,8 +255,9 @@ def reweight(w, s_old, ll, llmax, out):
     n = w.shape[0]
     s = 0.0
     s2 = 0.0
+    inv = 1.0 / s_old
     for i in range(n):
-        wi = w[i] / s_old * math.exp(ll[i] - llmax)
+        wi = w[i] * inv * math.exp(ll[i] - llmax)
         out[i] = wi
         s += wi
         s2 += wi * wi
