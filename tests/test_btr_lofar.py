@@ -182,3 +182,20 @@ def test_plot_command_line(tmp_path):
         assert main(["plot", str(prod), "--kind", kind, "--beam", "60", "--range-db", "25",
                      "-o", str(out)]) == 0
         assert out.stat().st_size > 10_000
+
+
+def test_btr_plot_of_3d_beams(tmp_path, rng):
+    """3-D beams (bearing × elevation): the BTR shows the elevation nearest horizontal."""
+    from arrayproc.chain import RunContext
+    p = rng.exponential(1.0, (4, 10, 6)).astype(np.float32)
+    beams = np.array([[b, e] for e in (-20.0, 0.0) for b in (0.0, 120.0, 240.0)])
+    out = tmp_path / "p3.h5"
+    with ProductsWriter(out) as w:
+        btr = BTR()
+        btr.bind(RunContext(products=w))
+        list(btr.process(power_blocks(p, 100.0 + np.arange(10), beams, np.arange(4.0))))
+    g = read_products(out)["btr"]
+    assert np.array_equal(g["elevation_deg"], beams[:, 1])
+    png = tmp_path / "b3.png"
+    plot_file(str(out), str(png), "btr")
+    assert png.stat().st_size > 5_000

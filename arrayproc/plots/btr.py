@@ -23,6 +23,13 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
 
     g, root = find_group(path, "btr")
     t, cone, p = g["time"], g["cone_deg"], g["power_db"]
+    elev = None
+    if "elevation_deg" in g:  # 3-D beams: the bearings of the elevation nearest horizontal
+        e = np.asarray(g["elevation_deg"], float)
+        elev = float(e[np.argmin(np.abs(e))])
+        sel = np.flatnonzero(e == elev)
+        sel = sel[np.argsort(cone[sel])]
+        cone, p = cone[sel], p[:, sel]
     top = robust_top(p)
     fig, ax = plt.subplots(figsize=(7.5, 8.0), dpi=110)
     if t.size:
@@ -32,7 +39,7 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
                        interpolation="nearest")
         cb = fig.colorbar(im, ax=ax, pad=0.02)
         cb.set_label(f"beam power, dB re 1 µPa² ({range_db:g} dB range)")
-    rec = open_truth_recording(root) if truth else None
+    rec = open_truth_recording(root) if truth and elev is None else None
     if rec is not None:
         from ..passive_truth import cone_angles
         with rec:
@@ -42,7 +49,10 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
         ax.legend(loc="lower right", fontsize=8, framealpha=0.7)
     ax.set_xlim(min(cone[0], cone[-1]), max(cone[0], cone[-1]))
     ax.set_ylim(t[-1] if t.size else 1, t[0] if t.size else 0)
-    ax.set_xlabel("cone angle (deg; 0 = forward end-fire, 90 = broadside)")
+    if elev is None:
+        ax.set_xlabel("cone angle (deg; 0 = forward end-fire, 90 = broadside)")
+    else:
+        ax.set_xlabel(f"bearing relative to the array's forward axis (deg), elevation {elev:g} deg")
     ax.set_ylabel("time (s since recording start)")
     lo, hi = g["attrs"].get("freq_lo"), g["attrs"].get("freq_hi")
     band = f", {lo:g}-{hi:g} Hz" if lo is not None else ""
