@@ -2,7 +2,8 @@
 
 1. Towed array, passive: simulate ``data/scenarios/towed_passive.toml`` → process with
    ``data/chains/towed_passive.toml`` (DFT filter, CBF, integration, BTR, LOFAR, bearings) →
-   BTR and LOFAR plots.
+   BTR and LOFAR plots → track the merchant from its bearings with a UKF resolving the
+   left-right ambiguity (``data/trackers/towed_demo.toml``) → track plot.
 2. Field data: import the six-hydrophone recording (when ``../shared/data`` is beside the
    checkout) → per-channel band power.
 """
@@ -39,7 +40,12 @@ def run_demo(outdir: str = "demo_out", progress: bool = False) -> None:
         _run(["process", str(rec), "-c", str(chain), "-o", str(prod), *np_])
         _run(["info", str(prod)])
         _run(["plot", str(prod), "--kind", "btr", "-o", str(out / "btr.png")])
-        _run(["plot", str(prod), "--kind", "lofar", "-o", str(out / "lofar.png")])
+        _run(["plot", str(prod), "--kind", "lofar", "--beam", "120", "-o",
+              str(out / "lofar.png")])
+        tracks = out / "towed_passive_tracks.h5"
+        _run(["track", str(prod), "-c", str(DATA / "trackers" / "towed_demo.toml"), "-o",
+              str(tracks), *np_])
+        _run(["plot", str(tracks), "--kind", "track", "-o", str(out / "track.png")])
     if XAV.is_dir():
         wavs = sorted(str(p) for p in XAV.glob("AMAR173.*.wav"))
         rec = out / "xav.h5"

@@ -154,3 +154,22 @@ def test_generic_per_step_path_equals_kernel_path():
     np.testing.assert_allclose(b[0], a[0], rtol=1e-8, atol=1e-6)
     np.testing.assert_allclose(b[2], a[2], rtol=1e-7, atol=1e-12)
     np.testing.assert_allclose(b[1], a[1], rtol=1e-6, atol=1e-6 * np.abs(a[1]).max())
+
+
+def test_cone_gate_selects_rows_and_is_validated(tmp_path):
+    """tracker.cone_gate keeps the rows inside [lo, hi] (e.g. out of the tow ship's sector)."""
+    from arrayproc.errors import ConfigError as _ConfigError
+    from arrayproc.track.runner import _read_bearings, load_tracker_config
+    t = np.repeat(np.arange(5.0), 2)
+    cone = np.tile([15.0, 120.0], 5)
+    snr = np.tile([20.0, 8.0], 5)  # the tow ship is the louder
+    prod = {"/": {}, "b": {"kind": "bearings", "time": t, "cone_deg": cone,
+                           "bearing_port_deg": 360 - cone, "bearing_stbd_deg": cone,
+                           "snr_db": snr}}
+    assert np.all(_read_bearings(prod, None, "p.h5")["bearing_stbd_deg"] == 15.0)
+    gated = _read_bearings(prod, None, "p.h5", [60.0, 180.0])
+    assert np.all(gated["bearing_stbd_deg"] == 120.0) and gated["time"].size == 5
+    bad = tmp_path / "t.toml"
+    bad.write_text('[tracker]\ncone_gate = [100.0, 20.0]\n')
+    with pytest.raises(_ConfigError, match="cone_gate"):
+        load_tracker_config(str(bad))

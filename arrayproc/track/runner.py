@@ -25,6 +25,7 @@ Tracker TOML::
     sigma_turn_deg_s = 0.05
     bearings = "bearings"     # products group (default: the only group of kind bearings)
     nav = "rec.h5"            # optional: recording with /nav (default: the products' source)
+    cone_gate = [20.0, 160.0] # optional: only rows with cone angles in [lo, hi] deg
     [tracker.params]          # filter parameters, e.g. alpha/beta/kappa, gh_order, likelihood
 
 One target is tracked: at each time the row with the highest ``snr_db`` (else ``level_db``) is
@@ -60,7 +61,7 @@ else:  # pragma: no cover
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
 _KEYS = {"filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings", "nav",
-         "params", *_PRIOR_KEYS}
+         "params", "cone_gate", *_PRIOR_KEYS}
 
 
 def load_tracker_config(path: str) -> dict[str, Any]:
@@ -96,6 +97,13 @@ def load_tracker_config(path: str) -> dict[str, Any]:
         raise ConfigError(f"{path}: tracker.side must be 'port' or 'starboard' when lr = false")
     if not isinstance(cfg["params"], dict):
         raise ConfigError(f"{path}: tracker.params must be a table")
+    if "cone_gate" in cfg:
+        g = cfg["cone_gate"]
+        if (not isinstance(g, list) or len(g) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in g)
+                or not 0 <= g[0] < g[1] <= 180):
+            raise ConfigError(f"{path}: tracker.cone_gate must be [lo, hi] cone angles, deg, "
+                              "0 <= lo < hi <= 180")
     for k in ("sigma_bearing_deg", "q1", "q2", *_PRIOR_KEYS):
         if k in cfg:
             v = cfg[k]
@@ -105,7 +113,8 @@ def load_tracker_config(path: str) -> dict[str, Any]:
     return cfg
 
 
-def _read_bearings(prod: dict, name: str | None, products_path: str) -> dict[str, np.ndarray]:
+def _read_bearings(prod: dict, name: str | None, products_path: str,
+                   cone_gate: list[float] | None = None) -> dict[str, np.ndarray]:
     groups = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "bearings"]
     if name is not None:
         if name not in prod or name == "/":
@@ -132,6 +141,15 @@ def _read_bearings(prod: dict, name: str | None, products_path: str) -> dict[str
         np.isfinite(cols["bearing_stbd_deg"])
     if not ok.any():
         raise FormatError(f"{products_path}: bearings contain no finite rows")
+    if cone_gate is not None:  # keep the contact inside the gate (e.g. out of the tow ship)
+        if "cone_deg" not in g:
+            raise FormatError(f"{products_path}: bearings column 'cone_deg' is missing "
+                              "(needed by tracker.cone_gate)")
+        cone = np.asarray(g["cone_deg"], float).reshape(-1)
+        ok &= (cone >= cone_gate[0]) & (cone <= cone_gate[1])
+        if ok.sum() < 2:
+            raise FormatError(f"{products_path}: fewer than two bearing rows inside "
+                              f"cone_gate {cone_gate}")
     score = cols.get("snr_db", cols.get("level_db", np.zeros_like(t)))
     score = np.where(np.isfinite(score), score, -np.inf)
     idx = np.flatnonzero(ok)
@@ -279,7 +297,7 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
-    b = _read_bearings(prod, cfg.get("bearings"), products_path)
+    b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"))
     src = cfg.get("nav") or _s(prod["/"].get("source", ""))
     if not src:
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
