@@ -40,7 +40,7 @@ def run_demo(outdir: str = "demo_out", progress: bool = False) -> None:
         _run(["process", str(rec), "-c", str(chain), "-o", str(prod), *np_])
         _run(["info", str(prod)])
         _run(["plot", str(prod), "--kind", "btr", "-o", str(out / "btr.png")])
-        _run(["plot", str(prod), "--kind", "lofar", "--beam", "120", "-o",
+        _run(["plot", str(prod), "--kind", "lofar", "--beam", "56", "-o",
               str(out / "lofar.png")])
         tracks = out / "towed_passive_tracks.h5"
         _run(["track", str(prod), "-c", str(DATA / "trackers" / "towed_demo.toml"), "-o",

@@ -5,6 +5,9 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
+
+import h5py
 
 from ..errors import FormatError
 
@@ -38,3 +41,38 @@ def discard(tmp: Path) -> None:
         os.unlink(tmp)
     except FileNotFoundError:
         pass
+
+
+class AtomicH5Writer:
+    """An HDF5 file written under a temporary name beside ``path``: :meth:`close` moves it into
+    place, :meth:`abort` (or an exception inside a ``with`` block) removes it."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self._tmp = temporary_sibling(self.path)
+        self._f = h5py.File(self._tmp, "w")
+
+    def _finish(self) -> None:
+        """Last writes before the file is closed (subclasses)."""
+
+    def close(self) -> None:
+        """Finish the file and move it into place."""
+        self._finish()
+        self._f.close()
+        commit(self._tmp, self.path)
+
+    def abort(self) -> None:
+        """Drop the partial file."""
+        try:
+            self._f.close()
+        finally:
+            discard(self._tmp)
+
+    def __enter__(self) -> Any:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()

@@ -9,7 +9,6 @@ renamed only when the run finished, with root attr ``complete = True``.
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Any
 
 import h5py
@@ -17,7 +16,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import FormatError
-from .atomic import commit, discard, temporary_sibling
+from .atomic import AtomicH5Writer
 from .recording import open_h5
 
 FORMAT = "arrayproc.products"
@@ -85,15 +84,13 @@ class GroupWriter:
         self.n_rows += n
 
 
-class ProductsWriter:
+class ProductsWriter(AtomicH5Writer):
     """Writes a products file; use as a context manager so a failed run leaves nothing behind."""
 
     def __init__(self, path: str | os.PathLike, source: str = "", chain: str = "",
                  time_window: tuple[float, float] | None = None,
                  attrs: dict[str, Any] | None = None) -> None:
-        self.path = Path(path)
-        self._tmp = temporary_sibling(self.path)
-        self._f = h5py.File(self._tmp, "w")
+        super().__init__(path)
         a = self._f.attrs
         a["format"] = FORMAT
         a["format_version"] = FORMAT_VERSION
@@ -120,26 +117,8 @@ class ProductsWriter:
         self._groups[name] = w
         return w
 
-    def close(self) -> None:
-        """Mark the run complete and move the file into place."""
-        self._f.attrs["complete"] = True
-        self._f.close()
-        commit(self._tmp, self.path)
-
-    def abort(self) -> None:
-        try:
-            self._f.close()
-        finally:
-            discard(self._tmp)
-
-    def __enter__(self) -> ProductsWriter:
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
+    def _finish(self) -> None:
+        self._f.attrs["complete"] = True  # only a finished run is marked complete
 
 
 def is_products(path: str | os.PathLike) -> bool:

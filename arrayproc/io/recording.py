@@ -17,7 +17,7 @@ import numpy as np
 
 from ..block import Block, Pose
 from ..errors import FormatError
-from .atomic import commit, discard, temporary_sibling
+from .atomic import AtomicH5Writer
 from .geometry import body_to_world
 from .nav import Nav
 
@@ -304,7 +304,7 @@ class Recording:
         self.close()
 
 
-class RecordingWriter:
+class RecordingWriter(AtomicH5Writer):
     """Streams a recording to disk: ``append`` chunks of samples, then ``close``.
 
     The file is written under a temporary name in the target directory and renamed on a
@@ -317,9 +317,7 @@ class RecordingWriter:
                  start_time: str | None = None, dtype: np.dtype | type = np.float32,
                  units: str = "Pa", chunk_samples: int | None = None,
                  attrs: dict[str, Any] | None = None) -> None:
-        self.path = Path(path)
-        self._tmp = temporary_sibling(self.path)
-        self._f = h5py.File(self._tmp, "w")
+        super().__init__(path)
         self._f.attrs["format"] = FORMAT
         self._f.attrs["format_version"] = FORMAT_VERSION
         self._f.attrs["sound_speed"] = float(sound_speed)
@@ -373,24 +371,3 @@ class RecordingWriter:
                 self.write_group(f"{name}/{k}", v)
             else:
                 g.create_dataset(k, data=v)
-
-    def close(self) -> None:
-        """Finish the file and move it into place."""
-        self._f.close()
-        commit(self._tmp, self.path)
-
-    def abort(self) -> None:
-        """Drop the partial file."""
-        try:
-            self._f.close()
-        finally:
-            discard(self._tmp)
-
-    def __enter__(self) -> RecordingWriter:
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()

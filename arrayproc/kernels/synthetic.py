@@ -184,6 +184,33 @@ def _solve_small(G: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
         out[i] = s / piv
 
 
+@njit(cache=True)
+def _fit_amplitudes(xrow: np.ndarray, kk: float, u: np.ndarray, x0: float, dx: float,
+                    V: np.ndarray, G: np.ndarray, b: np.ndarray, a: np.ndarray) -> None:
+    """One bin's plane-wave signatures V (K, C), v_k,n = exp(+j kk (x0 − n δx) u_k), and
+    least-squares amplitudes a = (VᴴV + loading)⁻¹ Vᴴ x (G, b are scratch)."""
+    n_k, n_c = V.shape
+    for j in range(n_k):
+        ph = kk * u[j]
+        rr = complex(np.cos(-ph * dx), np.sin(-ph * dx))
+        v = complex(np.cos(ph * x0), np.sin(ph * x0))
+        for n in range(n_c):
+            V[j, n] = v
+            v *= rr
+    for i in range(n_k):
+        for j in range(n_k):
+            s = 0.0 + 0.0j
+            for n in range(n_c):
+                s += np.conj(V[i, n]) * V[j, n]
+            G[i, j] = s
+        G[i, i] += 1e-9 * n_c  # loading
+        s = 0.0 + 0.0j
+        for n in range(n_c):
+            s += np.conj(V[i, n]) * xrow[n]
+        b[i] = s
+    _solve_small(G, b, a)
+
+
 @njit(cache=True, parallel=True)
 def plane_wave_fit(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, dx: float,
                    c: float, amp: np.ndarray, hess: np.ndarray, grad: np.ndarray) -> None:
@@ -208,26 +235,7 @@ def plane_wave_fit(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, x0: float, d
         r = np.empty(n_c, np.complex128)
         for f in range(ch * chunk, min(n_f, (ch + 1) * chunk)):
             kk = TWO_PI * freqs[f] / c
-            for j in range(n_k):
-                ph = kk * u[j]
-                rr = complex(np.cos(-ph * dx), np.sin(-ph * dx))
-                v = complex(np.cos(ph * x0), np.sin(ph * x0))
-                for n in range(n_c):
-                    V[j, n] = v
-                    v *= rr
-            for i in range(n_k):
-                for j in range(n_k):
-                    s = 0.0 + 0.0j
-                    for n in range(n_c):
-                        s += np.conj(V[i, n]) * V[j, n]
-                    G[i, j] = s
-                s = 0.0 + 0.0j
-                for n in range(n_c):
-                    s += np.conj(V[i, n]) * x[f, n]
-                b[i] = s
-            for i in range(n_k):
-                G[i, i] += 1e-9 * n_c  # loading
-            _solve_small(G, b, a)
+            _fit_amplitudes(x[f], kk, u, x0, dx, V, G, b, a)
             for n in range(n_c):
                 s = x[f, n]
                 for j in range(n_k):
@@ -303,25 +311,7 @@ def remove_plane_waves(x: np.ndarray, freqs: np.ndarray, u: np.ndarray, remove: 
         a = np.empty(n_k, np.complex128)
         for f in range(ch * chunk, min(n_f, (ch + 1) * chunk)):
             kk = TWO_PI * freqs[f] / c
-            for j in range(n_k):
-                ph = kk * u[j]
-                rr = complex(np.cos(-ph * dx), np.sin(-ph * dx))
-                v = complex(np.cos(ph * x0), np.sin(ph * x0))
-                for n in range(n_c):
-                    V[j, n] = v
-                    v *= rr
-            for i in range(n_k):
-                for j in range(n_k):
-                    s = 0.0 + 0.0j
-                    for n in range(n_c):
-                        s += np.conj(V[i, n]) * V[j, n]
-                    G[i, j] = s
-                G[i, i] += 1e-9 * n_c
-                s = 0.0 + 0.0j
-                for n in range(n_c):
-                    s += np.conj(V[i, n]) * x[f, n]
-                b[i] = s
-            _solve_small(G, b, a)
+            _fit_amplitudes(x[f], kk, u, x0, dx, V, G, b, a)
             for n in range(n_c):
                 out[f, n] = x[f, n]
             for j in range(n_k):

@@ -210,19 +210,7 @@ class IBF(Stage):
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = self.products("ibf_removed") if self.record else None
-        framer: SpectraFramer | None = None
-        for b in blocks:
-            if b.domain == ("time", "channel"):
-                if framer is None:
-                    framer = make_framer(self, b)
-                spec = framer.push(b)
-                if spec is None:
-                    continue
-            elif b.domain == SPECTRA_DOMAIN:
-                spec = b
-            else:
-                raise ConfigError(f"stage {self.name!r}: needs time or element-spectra input, "
-                                  f"got {b.domain}")
+        for spec in element_spectra(self, blocks):
             yield self.peel(spec, out)
 
     def peel(self, spec: Block, out=None) -> Block:
@@ -278,3 +266,21 @@ def make_framer(stage: Stage, b: Block) -> SpectraFramer:
     nav = rec.nav if rec is not None else None
     return SpectraFramer(nfft, nfft, stage.window,
                          None if stage.band is None else tuple(stage.band), nav)
+
+
+def element_spectra(stage: Stage, blocks: Iterator[Block]) -> Iterator[Block]:
+    """The element-spectra blocks of a stage's input: time blocks are framed (see
+    :func:`make_framer`), spectra blocks pass as they are."""
+    framer: SpectraFramer | None = None
+    for b in blocks:
+        if b.domain == ("time", "channel"):
+            if framer is None:
+                framer = make_framer(stage, b)
+            spec = framer.push(b)
+            if spec is not None:
+                yield spec
+        elif b.domain == SPECTRA_DOMAIN:
+            yield b
+        else:
+            raise ConfigError(f"stage {stage.name!r}: needs time or element-spectra input, "
+                              f"got {b.domain}")

@@ -35,8 +35,7 @@ from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
 from ..kernels import synthetic as ks
-from ..snapshots import SPECTRA_DOMAIN
-from .ibf import line_geometry, make_framer
+from .ibf import element_spectra, line_geometry
 
 
 def cone_axis(beams: dict) -> np.ndarray:
@@ -86,23 +85,11 @@ class _SyntheticAperture(Stage):
         return -2.0 * np.pi * freqs * (cur["t0"] - prev["t0"])
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
-        framer = None
         window: deque[dict] = deque(maxlen=self.snapshots)
         ring: np.ndarray | None = None  # (N_S, B, F) sub-aperture beams, reused
         slot = 0
         index = 0
-        for b in blocks:
-            if b.domain == ("time", "channel"):
-                if framer is None:
-                    framer = make_framer(self, b)
-                spec = framer.push(b)
-                if spec is None:
-                    continue
-            elif b.domain == SPECTRA_DOMAIN:
-                spec = b
-            else:
-                raise ConfigError(f"stage {self.name!r}: needs time or element-spectra input, "
-                                  f"got {b.domain}")
+        for spec in element_spectra(self, blocks):
             order, dx = line_geometry(self.name, spec.positions)
             xb = spec.positions[order, 0]
             x0 = xb[0] - spec.positions[:, 0].mean()
