@@ -34,6 +34,7 @@ from ..errors import ConfigError
 from ..kernels.peaks import pick_peaks
 from ..kernels.tpsw import tpsw
 from .btr import band_bins, snapshot_times
+from .integrate import check_power_block
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
            "freq_lo", "freq_hi")
@@ -91,9 +92,7 @@ class Bearings(Stage):
         out = None
         idx = None
         for b in blocks:
-            if b.domain != ("snapshot", "freq", "beam") or np.iscomplexobj(b.data):
-                raise ConfigError(f"stage {self.name!r}: needs power blocks from 'integrate', "
-                                  f"got {b.domain}")
+            check_power_block(self, b)
             cone = np.asarray(b.beams, float)
             if cone.ndim != 1:
                 raise ConfigError(f"stage {self.name!r}: needs cone-angle beams "

@@ -18,6 +18,7 @@ import numpy as np
 from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
+from .integrate import check_power_block
 
 
 def band_bins(freqs: np.ndarray, band: list[float] | None, where: str) -> np.ndarray:
@@ -57,9 +58,7 @@ class BTR(Stage):
         out = None
         idx = None
         for b in blocks:
-            if b.domain != ("snapshot", "freq", "beam") or np.iscomplexobj(b.data):
-                raise ConfigError(f"stage {self.name!r}: needs power blocks from 'integrate', "
-                                  f"got {b.domain}")
+            check_power_block(self, b)
             if idx is None:
                 idx = band_bins(b.freqs, self.band, f"stage {self.name!r}")
                 out = self.products("btr")

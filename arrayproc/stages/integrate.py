@@ -104,3 +104,10 @@ class Integrate(Stage):
             used = k * step
             tail_p = buf[used:].copy() if used < t_n else buf[:0]
             tail_t, tail_h, tail_k = tb[used:], hb[used:], kb[used:]
+
+
+def check_power_block(stage: Stage, b: Block) -> None:
+    """Raise a ConfigError naming ``stage`` unless ``b`` is a power block from ``integrate``."""
+    if b.domain != ("snapshot", "freq", "beam") or np.iscomplexobj(b.data):
+        raise ConfigError(f"stage {stage.name!r}: needs power blocks from 'integrate', "
+                          f"got {b.domain}")

@@ -21,6 +21,7 @@ from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
 from ..kernels.tpsw import tpsw
 from .btr import band_bins, beam_columns, snapshot_times
+from .integrate import check_power_block
 
 
 def _beams_check(v) -> str | None:
@@ -68,9 +69,7 @@ class LOFAR(Stage):
         out = None
         fidx = bidx = None
         for b in blocks:
-            if b.domain != ("snapshot", "freq", "beam") or np.iscomplexobj(b.data):
-                raise ConfigError(f"stage {self.name!r}: needs power blocks from 'integrate', "
-                                  f"got {b.domain}")
+            check_power_block(self, b)
             if fidx is None:
                 fidx = band_bins(b.freqs, self.band, f"stage {self.name!r}")
                 bidx = select_beams(b.beams, self.beams)
