@@ -1,12 +1,14 @@
 """The one place FFTs are computed: pyfftw with cached plans, falling back to scipy.fft.
 
 Both back-ends keep single precision for float32/complex64 input. Outputs are fresh arrays the
-caller owns. ``set_threads`` sets the FFTW thread count (default: all cores).
+caller owns. ``set_threads`` sets the FFTW thread count. The default is one thread: the
+stages already run their FFTs beside numba and BLAS threads, and on this project's 2-core
+machine a two-thread FFTW plan was measured 1.3-25x *slower* than a one-thread plan for the
+shapes the stages use (e.g. a 256-point inverse FFT of 1021 rows: 0.33 ms with one thread,
+8 ms with two; `docs/performance.md`).
 """
 
 from __future__ import annotations
-
-import os
 
 import numpy as np
 import scipy.fft as _sfft
@@ -19,7 +21,7 @@ try:
 except ImportError:  # pragma: no cover - pyfftw is a dependency, the fallback is for odd systems
     HAVE_PYFFTW = False
 
-_threads = os.cpu_count() or 1
+_threads = 1
 _plans: dict[tuple, object] = {}
 _MAX_PLANS = 64
 
