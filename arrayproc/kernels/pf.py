@@ -443,15 +443,16 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
 
 @njit(cache=True)
 def rpf_step(parts, w, w_new, s, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta,
-             n_thr, resample_method, h, idx, src, mean, pcov, dmat):
-    """One bearings-only RPF cycle for a step-by-step tracker (absolute particle states):
-    prediction, update, regularization-resampling if N_eff < N_thr·N, moments. Same kernels
-    and draw order as :func:`rpf_run`. Returns ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``;
-    the caller adds the Gaussian normalising constant to get log p(θ | past)."""
+             level, sig_level, use_level, sl_par, tl_r0, tl_dr, tl, n_thr, resample_method, h,
+             idx, src, mean, pcov, dmat):
+    """One RPF cycle for a step-by-step tracker (absolute particle states): prediction,
+    update with the bearing (and the level if ``use_level``), regularization-resampling if
+    N_eff < N_thr·N, moments. Same kernels and draw order as :func:`rpf_run`. Returns
+    ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``; the caller adds the Gaussian normalising
+    constants to get log p(z | past)."""
     n = parts.shape[0]
-    dummy = np.zeros(2)
-    llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, 0.0,
-                           1.0, True, False, dummy, 0.0, 1.0, dummy)
+    llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, level,
+                           sig_level, True, use_level, sl_par, tl_r0, tl_dr, tl)
     s, neff = reweight(w, s, ll, llmax, w_new)
     w[:] = w_new
     logev = llmax + math.log(s)

@@ -150,7 +150,12 @@ class RPFTracker:
     ``initialize`` draws the particles from N(x0, P0) (the runner's linearised polar prior).
     The process noise is ``sigma_a`` (m/s²) if given, else σ_a² = q1 / T from the model's
     white-noise intensity (the same velocity variance per step). ``update`` returns
-    log p(θ_k | θ_1..k−1) ≈ log Σ w_i N(θ_k; h(x_i), σ²).
+    log p(z_k | z_1..k−1) ≈ log Σ w_i p(z_k | x_i).
+
+    Levels (SPL paper eqs. (15)-(16), (31)-(33)): with ``tl_table`` (a bundled table name in
+    ``data/tl`` or a path to a table file), ``update(bearing_deg, level_db)`` also weights by
+    the received level (dB re 1 µPa) with ``sigma_level_db``, source level eq. (12)
+    (``source_level`` = (sl0, slope, v_ref)) and TL at (``src_depth_m``, ``rcv_depth_m``).
     """
 
     name = "rpf"
@@ -158,7 +163,9 @@ class RPFTracker:
     def __init__(self, model, sigma_deg: float = 1.5, n_particles: int = 5000,
                  n_thr: float = 1.0 / 3.0, sigma_a: float | None = None,
                  resampling: str = "systematic", bandwidth_scale: float = 1.0,
-                 seed: int = 0) -> None:
+                 seed: int = 0, tl_table: str | None = None, src_depth_m: float = 5.0,
+                 rcv_depth_m: float = 300.0, sigma_level_db: float = 10.0,
+                 source_level: tuple = (170.0, 53.0, 5.14)) -> None:
         if getattr(model, "dim", 4) != 4:
             raise ConfigError("tracker: the rpf filter supports the cv model only")
         if not sigma_deg > 0 or n_particles < 2 or not 0 < n_thr <= 1:
@@ -168,6 +175,18 @@ class RPFTracker:
             raise ConfigError("tracker: rpf resampling must be 'systematic' or 'multinomial'")
         self.model = model
         self.sigma = math.radians(float(sigma_deg))
+        self.sigma_level = float(sigma_level_db)
+        self.sl_par = np.asarray(source_level, float).reshape(3)
+        self.tl = (0.0, 1.0, np.zeros(2))
+        self.has_tl = tl_table is not None
+        if self.has_tl:
+            from .tl.table import default_table_path
+
+            path = tl_table if ("/" in tl_table or tl_table.endswith(".h5")) else \
+                default_table_path(tl_table)
+            self.tl = TLTable.load(path).range_profile(src_depth_m, rcv_depth_m)
+        if not self.sigma_level > 0:
+            raise ConfigError("tracker: rpf sigma_level_db must be > 0")
         self.n = int(n_particles)
         self.n_thr = float(n_thr)
         self.sigma_a = sigma_a
@@ -197,8 +216,12 @@ class RPFTracker:
         """Store the step; the particles move in :meth:`update` (one fused kernel)."""
         self._pending = (float(T), np.asarray(own_prev, float), np.asarray(own_next, float))
 
-    def update(self, bearing_deg: float) -> float:
+    def update(self, bearing_deg: float, level_db: float | None = None) -> float:
         from .filters import FilterDivergence
+
+        use_level = level_db is not None and math.isfinite(level_db)
+        if use_level and not self.has_tl:
+            raise ConfigError("tracker: levels given to the rpf filter without a tl_table")
 
         if self._pending is None:
             T, own_prev, own_next = 0.0, np.zeros(4), np.zeros(4)
@@ -209,10 +232,13 @@ class RPFTracker:
             math.sqrt(self.model.q1 / T) if T > 0 else 0.0)
         ww, ll, idx, src, mean, pcov, dmat = self._scratch
         absolute = self.parts + own_prev               # eq. (4): x + x^o, then F, then − x^o'
+        r0, dr, tl = self.tl
         s, logev, done = kpf.rpf_step(absolute, self.w, ww, self.s, ll, self.state, T, sa,
                                       own_next[0], own_next[1], math.radians(bearing_deg),
-                                      self.sigma, self.n_thr, self.method, self.h, idx, src,
-                                      mean, pcov, dmat)
+                                      self.sigma, float(level_db) if use_level else 0.0,
+                                      self.sigma_level, use_level, self.sl_par, r0, dr, tl,
+                                      self.n_thr, self.method, self.h, idx, src, mean, pcov,
+                                      dmat)
         self.parts = absolute - own_next
         self.s = s
         self.n_resampled += int(done)
@@ -220,4 +246,7 @@ class RPFTracker:
         self.P = pcov.copy()
         if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
             raise FilterDivergence("rpf: non-finite state")
-        return float(logev - math.log(math.sqrt(2 * math.pi) * self.sigma))
+        norm = math.log(math.sqrt(2 * math.pi) * self.sigma)
+        if use_level:
+            norm += math.log(math.sqrt(2 * math.pi) * self.sigma_level)
+        return float(logev - norm)
