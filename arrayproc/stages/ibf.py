@@ -70,7 +70,7 @@ def onion_peel(X: np.ndarray, freqs: np.ndarray, x: np.ndarray, dx: float, c: fl
                max_sources: int = 3, stop_db: float = 3.0,
                sector: tuple[float, float] | None = None, keep_sources: int = 2,
                oversample: int = 4, grid: int = 0, fit_iters: int = 2,
-               detect_bins: int = 1024) -> tuple[np.ndarray, list[dict]]:
+               detect_bins: int = 512) -> tuple[np.ndarray, list[dict]]:
     """Remove the loudest plane waves of a band from one snapshot's element spectra.
 
     Each round beamforms the residual over the band (the sum over bins of the beam powers),
