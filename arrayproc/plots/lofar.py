@@ -65,7 +65,7 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                     ff = np.where(near, fr[:, k], np.nan)
                     if np.all(np.isnan(ff)):
                         continue
-                    ax.plot(ff, t, ls=(0, (3, 4)), lw=1.0, alpha=0.9,
+                    ax.plot(ff, t, ls=(0, (2, 6)), lw=0.8, alpha=0.5,
                             color=OVERLAY_COLOURS[i % len(OVERLAY_COLOURS)],
                             label=f"truth: {name}" if k == 0 else None)
                     first = False
