@@ -38,7 +38,7 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
                        extent=[cone[0], cone[-1], t[-1] + dt / 2, t[0] - dt / 2],
                        interpolation="nearest")
         cb = fig.colorbar(im, ax=ax, pad=0.02)
-        cb.set_label(f"beam power, dB re 1 µPa² ({range_db:g} dB range)")
+        cb.set_label(f"beam power Σ|Y|², dB re 1 µPa², unnormalised ({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth and elev is None else None
     if rec is not None:
         from ..passive_truth import cone_angles

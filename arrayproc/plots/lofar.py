@@ -52,7 +52,7 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                    interpolation="nearest")
     cb = fig.colorbar(im, ax=ax, pad=0.02)
     cb.set_label(("level over TPSW background, dB" if norm == "tpsw"
-                  else "power, dB re 1 µPa²") + f" ({range_db:g} dB range)")
+                  else "power Σ|Y|², dB re 1 µPa², unnormalised") + f" ({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth else None
     if rec is not None:
         from ..passive_truth import cone_angles, tonal_frequencies
