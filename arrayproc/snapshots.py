@@ -98,8 +98,11 @@ class SpectraFramer:
         if frames.shape[0] == 0:
             return None
         bins = self._select(b.fs)
-        spec = fft.rfft(frames.astype(np.float32) * self._taper[None, :, None], axis=1)
-        x = np.ascontiguousarray(spec[:, bins[0]:bins[-1] + 1, :])  # (S, F, C)
+        # FFT along contiguous rows (channel-major), then back to (S, F, C) for the band only
+        rows = np.ascontiguousarray(frames.transpose(0, 2, 1), dtype=np.float32)
+        rows *= self._taper[None, None, :]
+        spec = fft.rfft(rows, axis=2)
+        x = np.ascontiguousarray(spec[:, :, bins[0]:bins[-1] + 1].transpose(0, 2, 1))
         times = (starts + 0.5 * self.nfft) / b.fs
         if self.nav is not None:
             pos, hd, _, spd = self.nav.at(times)

@@ -1,11 +1,12 @@
 """Benchmark: inverse beamforming (3 waves) + ETAM (N_S = 10) on 64 channels at 5120 Hz.
 
-A towed 64 × 0.36 m array at 2.5 m/s (ETAM snapshots T_B = (N_H − 1) δx / 2U = 4.536 s,
-23 224 samples), three tonal plane waves and white noise, band 100-1000 Hz (4 087 bins),
-181 cone beams. Runs the chain ``ibf → etam`` through the engine (reader, products writer) and
-reports multiples of real time; then times the ETAM part alone against a plain-numpy
-implementation of the same equations (einsum sub-aperture beams, vectorised eq. 2.53-2.54,
-explicit steering exponentials) on the same element spectra, in this process.
+A towed 64 × 0.36 m array at 2.5 m/s (ETAM snapshots T_B = (N_H − 1) δx / 2U = 4.536 s, i.e.
+23 224 samples, rounded up to the FFT-friendly 23 232), three tonal plane waves and white
+noise, band 100-1000 Hz, 181 cone beams. Runs the chain ``ibf → etam`` through the engine
+(reader, products writer) and reports multiples of real time; then times the ETAM part alone
+against a plain-numpy implementation of the same equations (einsum sub-aperture beams,
+vectorised eqs. 2.53-2.54, explicit steering exponentials) on the same element spectra, in
+this process.
 
     python scripts/bench_etam.py [--seconds 120] [--json OUT]
 """

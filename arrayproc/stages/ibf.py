@@ -251,7 +251,8 @@ def line_geometry(name: str, positions: np.ndarray) -> tuple[np.ndarray, float]:
 
 def make_framer(stage: Stage, b: Block) -> SpectraFramer:
     """The element-spectra framer of a stage with ``snapshot``/``nfft``/``window``/``band``
-    keys: the snapshot length from the nav speed (thesis eq. 2.32 or 2.52) or given."""
+    keys: the snapshot length from the nav speed (thesis eq. 2.32 or 2.52, rounded up to an
+    FFT-friendly number of samples) or given."""
     if stage.snapshot == "nfft":
         nfft = stage.nfft
     else:
@@ -261,7 +262,8 @@ def make_framer(stage: Stage, b: Block) -> SpectraFramer:
             tb = snapshot_seconds(stage.snapshot, b.positions.shape[0], dx, speed)
         except ConfigError as e:
             raise ConfigError(f"stage {stage.name!r}: {e}") from None
-        nfft = int(round(tb * b.fs))
+        # rounded up to an FFT-friendly length (at most a few per mille longer than T_B)
+        nfft = fft.next_fast_len(int(round(tb * b.fs)))
     rec = stage.ctx.recording
     nav = rec.nav if rec is not None else None
     return SpectraFramer(nfft, nfft, stage.window,
