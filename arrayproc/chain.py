@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import collections
 import sys
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -124,7 +125,7 @@ class RunContext:
     log: Callable[[str], None] = field(default=lambda msg: print(msg, file=sys.stderr))
 
 
-class Stage:
+class Stage(ABC):
     """Base of all stages: a generator transform ``blocks -> blocks``.
 
     Subclasses declare ``kind`` (the TOML ``type``), ``params`` (name -> :class:`Param`) and
@@ -152,7 +153,7 @@ class Stage:
         self.ctx = RunContext()
         self.validate()
 
-    def validate(self) -> None:
+    def validate(self) -> None:  # noqa: B027 - optional hook, empty by default
         """Cross-parameter checks; raise ConfigError naming the key."""
 
     def bind(self, ctx: RunContext) -> None:
@@ -169,8 +170,9 @@ class Stage:
         """Input needed before this stage's output is valid (s), for segmented runs."""
         return 0.0
 
+    @abstractmethod
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
-        raise NotImplementedError  # pragma: no cover - abstract
+        """The stage's generator transform (subclasses)."""
 
     def __call__(self, blocks: Iterator[Block]) -> Iterator[Block]:
         return self.process(blocks)
