@@ -7,6 +7,7 @@ are written to a temporary file and renamed, so a failed run leaves nothing behi
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -200,6 +201,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("arrayproc: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `arrayproc info f.h5 | head`: stop quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
     except MemoryError:
         print("arrayproc: error: out of memory (try a smaller block size)", file=sys.stderr)
         return 2

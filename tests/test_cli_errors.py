@@ -154,3 +154,11 @@ def test_info_on_recording_and_products(tmp_path, good, capsys):
     assert main(["info", str(tmp_path / "out.h5")]) == 0
     out = capsys.readouterr().out
     assert "power: kind=power rows=8" in out
+
+
+def test_closed_pipe_is_quiet(tmp_path, good):
+    """`arrayproc info FILE | head -1`: no traceback when the reader goes away."""
+    rec, _ = good
+    r = subprocess.run(f"{sys.executable} -m arrayproc.cli info {rec} | head -1", shell=True,
+                       capture_output=True, text=True)
+    assert r.stdout.count("\n") == 1 and "Traceback" not in r.stderr
