@@ -4,7 +4,11 @@
    ``data/chains/towed_passive.toml`` (DFT filter, CBF, integration, BTR, LOFAR, bearings) →
    BTR and LOFAR plots → track the merchant from its bearings with a UKF resolving the
    left-right ambiguity (``data/trackers/towed_demo.toml``) → track plot.
-2. Field data: import the six-hydrophone recording (when ``../shared/data`` is beside the
+2. Passive synthetic aperture: simulate ``data/scenarios/towed_synthetic_aperture.toml`` (a
+   weak 250 Hz tonal at cone 100°, a loud broadband source astern, lateral array motion) →
+   BTR of the conventional beamformer (``data/chains/cbf_narrowband.toml``) beside the BTR of
+   inverse beamforming + ETAM (``data/chains/ibf_etam.toml``).
+3. Field data: import the six-hydrophone recording (when ``../shared/data`` is beside the
    checkout) → per-channel band power.
 """
 
@@ -46,6 +50,15 @@ def run_demo(outdir: str = "demo_out", progress: bool = False) -> None:
         _run(["track", str(prod), "-c", str(DATA / "trackers" / "towed_demo.toml"), "-o",
               str(tracks), *np_])
         _run(["plot", str(tracks), "--kind", "track", "-o", str(out / "track.png")])
+    scenario = DATA / "scenarios" / "towed_synthetic_aperture.toml"
+    if scenario.exists():
+        rec = out / "synthetic_aperture.h5"
+        _run(["simulate", str(scenario), "-o", str(rec), *np_])
+        for name in ("cbf_narrowband", "ibf_etam"):
+            prod = out / f"synthetic_aperture_{name}.h5"
+            _run(["process", str(rec), "-c", str(DATA / "chains" / f"{name}.toml"), "-o",
+                  str(prod), *np_])
+            _run(["plot", str(prod), "--kind", "btr", "-o", str(out / f"btr_{name}.png")])
     if XAV.is_dir():
         wavs = sorted(str(p) for p in XAV.glob("AMAR173.*.wav"))
         rec = out / "xav.h5"
