@@ -24,10 +24,11 @@ non-overlapping time blocks of ``block`` samples; stages that need overlapping f
 (FFT-based ones) frame the stream themselves with :class:`FrameBuffer`, so block boundaries
 never show in the results.
 
-Segments: :func:`run_chain` accepts ``t_start``/``t_stop``; it starts reading a warm-up margin
-earlier (the sum of the stages' ``warmup_seconds`` along the longest path) and keeps only product
-rows whose time falls in the segment, so independent segments (e.g. on Dask workers)
-concatenate into the result of one long run.
+Segments: :func:`run_chain` accepts ``t_start``/``t_stop``; it reads from a warm-up margin
+before the start to the same margin after the stop (the sum of the stages' ``warmup_seconds``
+along the longest path, each at its input rate) and the products writer keeps only rows whose
+time falls in the segment, so independent segments (e.g. on Dask workers) concatenate into the
+result of one long run.
 """
 
 from __future__ import annotations
@@ -166,9 +167,24 @@ class Stage(ABC):
             return None
         return self.ctx.products.group(self.name, kind, self.name, **attrs)
 
+    #: The stage this one reads (None: the reader), and its input sample rate (Hz); both set
+    #: by :func:`build_chain` / :func:`run_chain` before data flows.
+    upstream: Stage | None = None
+    fs_in: float = 0.0
+
     def warmup_seconds(self, fs: float) -> float:
-        """Input needed before this stage's output is valid (s), for segmented runs."""
+        """Input needed before this stage's output is valid (s), for segmented runs; ``fs`` is
+        the stage's input sample rate."""
         return 0.0
+
+    def output_rate(self, fs: float) -> float:
+        """Sample rate (Hz) of the time series this stage passes on, given its input rate."""
+        return fs
+
+    def snapshot_seconds(self) -> float | None:
+        """Time between this stage's output snapshots (s), when it emits snapshots; by default
+        that of the stage it reads."""
+        return self.upstream.snapshot_seconds() if self.upstream is not None else None
 
     @abstractmethod
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -262,7 +278,9 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
                               "an earlier stage")
         if src is None and stages:
             src = stages[-1].name
-        stages.append(STAGES[kind](name=name, **table))
+        stage = STAGES[kind](name=name, **table)
+        stage.upstream = next((s for s in stages if s.name == src), None)
+        stages.append(stage)
         inputs.append(src)
         names.add(name)
     return ChainSpec(stages, inputs, block, text)
@@ -410,9 +428,22 @@ class FrameBuffer:
         return frames, starts
 
 
+def set_rates(spec: ChainSpec, fs: float) -> None:
+    """Give every stage its input sample rate (``fs_in``), following the branches."""
+    rates: dict[str | None, float] = {None: fs}
+    for stage, src in zip(spec.stages, spec.inputs):
+        stage.fs_in = rates[src]
+        rates[stage.name] = stage.output_rate(stage.fs_in)
+
+
 def warmup_margin(spec: ChainSpec, fs: float) -> float:
-    """Warm-up (s) a segment needs before its start: the stages' margins added up."""
-    return float(sum(s.warmup_seconds(fs) for s in spec.stages))
+    """Warm-up (s) a segment needs before its start: along each path from the reader, the
+    stages' margins added up; the longest path counts."""
+    set_rates(spec, fs)
+    margin: dict[str | None, float] = {None: 0.0}
+    for stage, src in zip(spec.stages, spec.inputs):
+        margin[stage.name] = margin[src] + stage.warmup_seconds(stage.fs_in)
+    return float(max(margin.values()))
 
 
 def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
@@ -429,10 +460,14 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     for s in spec.stages:
         s.bind(ctx)
     fs = recording.fs
-    a = 0.0 if t_start is None else max(0.0, t_start - warmup_margin(spec, fs))
+    set_rates(spec, fs)
+    margin = warmup_margin(spec, fs)
+    a = 0.0 if t_start is None else max(0.0, t_start - margin)
     start = int(round(a * fs))
+    # Read past the end by the same margin: a window stamped before t_stop may reach beyond
+    # it (rows after t_stop are dropped by the products writer's time window).
     stop = recording.n_samples if t_stop is None else min(recording.n_samples,
-                                                          int(round(t_stop * fs)))
+                                                          int(round((t_stop + margin) * fs)))
     n = recording.n_blocks(spec.block, spec.block, start, stop)
     source: Iterable[Block] = recording.blocks(spec.block, spec.block, start, stop)
     bar = None

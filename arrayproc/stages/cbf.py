@@ -446,6 +446,9 @@ class CBF(Stage):
     def warmup_seconds(self, fs: float) -> float:
         return self.nfft / fs
 
+    def snapshot_seconds(self) -> float | None:
+        return self.hop / self.fs_in if self.fs_in else None
+
 
 def beam_power_reference(frames: np.ndarray, fs: float, positions: np.ndarray,
                          cone_deg: np.ndarray, band: tuple[float, float], c: float,

@@ -257,6 +257,9 @@ class DFTFilter(Stage):
         if ys and sum(y.shape[0] for y in ys):
             yield out_block(ys, first)
 
+    def output_rate(self, fs: float) -> float:
+        return fs / self.decimate
+
     def warmup_seconds(self, fs: float) -> float:
         if self._fs != fs:
             self._setup(fs)

@@ -208,6 +208,9 @@ class IBF(Stage):
         if self.sector is not None and not (0 <= self.sector[0] and self.sector[1] <= 180):
             raise ConfigError(f"stage {self.name!r}: key 'sector' must lie in [0, 180] deg")
 
+    def snapshot_seconds(self) -> float | None:
+        return rule_snapshot_seconds(self)
+
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = self.products("ibf_removed") if self.record else None
         for spec in element_spectra(self, blocks):
@@ -286,3 +289,25 @@ def element_spectra(stage: Stage, blocks: Iterator[Block]) -> Iterator[Block]:
         else:
             raise ConfigError(f"stage {stage.name!r}: needs time or element-spectra input, "
                               f"got {b.domain}")
+
+
+def rule_snapshot_seconds(stage: Stage) -> float | None:
+    """T_B (s) of a stage with ``snapshot``/``nfft`` keys, known before data flows: given
+    (``nfft``), that of element spectra from upstream, or from the recording's median nav
+    speed (eq. 2.32 / 2.52, before rounding to an FFT size). None when unknown."""
+    if stage.snapshot == "nfft":
+        return stage.nfft / stage.fs_in if stage.fs_in else None
+    up = stage.upstream.snapshot_seconds() if stage.upstream is not None else None
+    if up is not None:
+        return up
+    rec = stage.ctx.recording
+    if rec is None or rec.nav.time.size < 2:
+        return None
+    try:
+        _, dx = uniform_line(rec.positions)
+    except ConfigError:
+        return None
+    speed = float(np.median(rec.nav.at(rec.nav.time)[3]))
+    if not speed > 0:
+        return None
+    return snapshot_seconds(stage.snapshot, rec.positions.shape[0], dx, speed)

@@ -44,6 +44,12 @@ class Integrate(Stage):
         "mean": Param("bool", False, "divide the sum by N_B"),
     }
 
+    def warmup_seconds(self, fs: float) -> float:
+        """A full window of snapshots before the segment (a blockwise window may start up to
+        N_B − 1 snapshots earlier than the segment's first output)."""
+        dt = self.snapshot_seconds()
+        return 0.0 if dt is None else self.snapshots * dt
+
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         n = self.snapshots
         step = n if self.mode == "blockwise" else 1

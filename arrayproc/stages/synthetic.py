@@ -35,7 +35,7 @@ from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
 from ..kernels import synthetic as ks
-from .ibf import element_spectra, line_geometry
+from .ibf import element_spectra, line_geometry, rule_snapshot_seconds
 
 
 def cone_axis(beams: dict) -> np.ndarray:
@@ -77,8 +77,13 @@ class _SyntheticAperture(Stage):
             raise ConfigError(f"stage {self.name!r}: {e}") from None
         self._u = np.cos(np.deg2rad(self.cone))
 
+    def snapshot_seconds(self) -> float | None:
+        return rule_snapshot_seconds(self)
+
     def warmup_seconds(self, fs: float) -> float:
-        return 0.0  # set per stream once the snapshot length is known (see process)
+        """N_S snapshots (the window) before the segment's first output."""
+        dt = self.snapshot_seconds()
+        return 0.0 if dt is None else self.snapshots * dt
 
     # Φ_s for the newest snapshot given the previous one; overridden by ETAM.
     def phase_step(self, prev: dict, cur: dict, freqs: np.ndarray) -> np.ndarray:
