@@ -18,8 +18,11 @@ Peaks are refined to sub-beam resolution by a parabola through the peak beam and
 neighbours (dB against cone angle). Rows (products ``bearings``, DESIGN section 4): ``time``
 (s), ``cone_deg``, ``bearing_port_deg = heading − cone`` and ``bearing_stbd_deg = heading +
 cone`` (deg true, the left-right pair; heading of the array at the snapshot), ``level_db`` (dB
-re ``ref``²), ``snr_db`` (over the noise estimate), ``freq_lo``/``freq_hi`` (Hz: the band summed,
-or the line's bin edges). Blocks pass on.
+re ``ref``², the thesis's unnormalised beam-power sums), ``snr_db`` (over the noise estimate),
+``freq_lo``/``freq_hi`` (Hz: the band summed, or the line's bin edges), ``spl_db`` (the
+received level at a hydrophone of a plane wave from the peak's direction: the in-band mean
+square for broadband peaks, the tone's mean square for lines; dB re ``ref``², see
+:func:`received_level_offset_db`; noise in the beam adds to it at low SNR). Blocks pass on.
 """
 
 from __future__ import annotations
@@ -37,7 +40,29 @@ from .btr import band_bins, snapshot_times
 from .integrate import check_power_block
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
-           "freq_lo", "freq_hi")
+           "freq_lo", "freq_hi", "spl_db")
+
+
+def received_level_offset_db(b: Block, broadband: bool) -> float:
+    """dB to subtract from a beam-power level (dB re 1 µPa², the thesis's unnormalised sums)
+    to get the received level at a hydrophone of a plane wave from the beam's direction.
+
+    Per CBF snapshot a tone of amplitude A on a bin gives |Y| = N_H·N_DFT·A/2 (window and
+    shading of mean 1), so its mean square A²/2 is 2|Y|²/(N_H²·N_DFT²); a broadband wave's
+    power per bin carries the window's mean square ⟨w²⟩ as well. Integration sums N_B
+    snapshots (unless ``mean``), a synthetic aperture adds N_S snapshots coherently (×N_S²).
+    """
+    m = b.meta
+    n_h = b.positions.shape[0]
+    nfft = float(m.get("nfft", 1))
+    n_b = 1 if m.get("integration_mean") else int(m.get("snapshots", 1))
+    n_s = int(m.get("synthetic", {}).get("snapshots", 1)) if isinstance(
+        m.get("synthetic"), dict) else 1
+    off = 10 * np.log10(n_b * (n_h * nfft * n_s) ** 2 / 2.0)
+    if broadband:
+        from .cbf import time_window
+        off += 10 * np.log10(np.mean(time_window(str(m.get("window", "none")), int(nfft)) ** 2))
+    return float(off)
 
 
 @register
@@ -74,7 +99,7 @@ class Bearings(Stage):
 
     def _rows(self, t: float, heading: float, level_db: np.ndarray, cone: np.ndarray,
               thr_db: float, f_lo: float, f_hi: float, rows: dict[str, list],
-              dynamic_db: float = np.inf) -> None:
+              dynamic_db: float = np.inf, offset_db: float = np.nan) -> None:
         noise_db = float(np.median(level_db))
         floor = max(noise_db + thr_db, float(level_db.max()) - dynamic_db)
         for pos, lev, _ in pick_peaks(level_db, cone, floor, self.min_separation,
@@ -87,6 +112,7 @@ class Bearings(Stage):
             rows["snr_db"].append(lev - noise_db)
             rows["freq_lo"].append(f_lo)
             rows["freq_hi"].append(f_hi)
+            rows["spl_db"].append(lev - offset_db)
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = None
@@ -106,21 +132,24 @@ class Bearings(Stage):
                                   else 0.0))
             rows: dict[str, list] = {k: [] for k in COLUMNS}
             lref = 10 * np.log10(self.ref**2)
+            off_bb = received_level_offset_db(b, broadband=True)
+            off_line = received_level_offset_db(b, broadband=False)
             for s in range(b.data.shape[0]):
                 p = b.data[s]  # (F, B)
                 if self.broadband:
                     bp = p[idx].sum(axis=0, dtype=np.float64)
                     self._rows(times[s], heads[s], 10 * np.log10(np.maximum(bp, 1e-300)) - lref,
                                cone, self.threshold_db, float(b.freqs[idx[0]]),
-                               float(b.freqs[idx[-1]]), rows)
+                               float(b.freqs[idx[-1]]), rows, offset_db=off_bb)
                 if self.lines:
-                    self._lines(p, b.freqs, times[s], heads[s], cone, df, lref, rows)
+                    self._lines(p, b.freqs, times[s], heads[s], cone, df, lref, rows, off_line)
             if out is not None and rows["time"]:
                 out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
             yield b
 
     def _lines(self, p: np.ndarray, freqs: np.ndarray, t: float, heading: float,
-               cone: np.ndarray, df: float, lref: float, rows: dict[str, list]) -> None:
+               cone: np.ndarray, df: float, lref: float, rows: dict[str, list],
+               offset_db: float = np.nan) -> None:
         spec = np.ascontiguousarray(p.T, dtype=np.float64)  # (B, F)
         bg = tpsw(spec, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
         ratio_db = 10 * np.log10(np.maximum(spec, 1e-300) / np.maximum(bg, 1e-300))
@@ -133,4 +162,4 @@ class Bearings(Stage):
             row_db = 10 * np.log10(np.maximum(spec[:, fi], 1e-300)) - lref
             self._rows(t, heading, row_db, cone, self.line_threshold_db,
                        float(freqs[fi] - 0.5 * df), float(freqs[fi] + 0.5 * df), rows,
-                       self.line_dynamic_db)
+                       self.line_dynamic_db, offset_db)

@@ -101,7 +101,8 @@ class Integrate(Stage):
                 t_out = tb[win_idx].mean(axis=1)
                 h_out = _circ_mean_deg(hb[win_idx], axis=1)
                 meta = dict(b.meta)
-                meta.update(times=t_out, headings=h_out, snapshots=n, integration=self.mode)
+                meta.update(times=t_out, headings=h_out, snapshots=n, integration=self.mode,
+                            integration_mean=self.mean)
                 d = float(b.meta.get("nfft", 0)) / b.fs  # one snapshot's duration, s
                 t0 = float(tb[0] - 0.5 * d)
                 span = float(tb[win_idx[-1, -1]] - tb[0]) + d

@@ -32,15 +32,17 @@ class LRResolver:
         return np.where(self.alive, np.exp(self.logw), 0.0)
 
     def step(self, T: float, own_prev: np.ndarray, own_next: np.ndarray,
-             bearings_deg: Sequence[float]) -> None:
-        """Predict every hypothesis, update hypothesis h with ``bearings_deg[h]`` and reweight:
+             bearings_deg: Sequence[float], level_db: float | None = None) -> None:
+        """Predict every hypothesis, update hypothesis h with ``bearings_deg[h]`` (and the
+        received level ``level_db``, dB re 1 µPa, for filters that use levels) and reweight:
         ω_k^h ∝ p_k^h ω_{k−1}^h (eqs. (9)-(11)). A diverged hypothesis gets weight zero."""
         for h, f in enumerate(self.filters):
             if not self.alive[h]:
                 continue
             try:
                 f.predict(T, own_prev, own_next)
-                self.logw[h] += f.update(bearings_deg[h])
+                self.logw[h] += (f.update(bearings_deg[h]) if level_db is None
+                                 else f.update(bearings_deg[h], level_db))
             except FilterDivergence:
                 self.alive[h] = False
         if not self.alive.any():

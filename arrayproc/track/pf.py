@@ -160,6 +160,8 @@ class RPFTracker:
 
     name = "rpf"
 
+    uses_levels = True  # update(bearing_deg, level_db): ``tracker.level`` may feed it
+
     def __init__(self, model, sigma_deg: float = 1.5, n_particles: int = 5000,
                  n_thr: float = 1.0 / 3.0, sigma_a: float | None = None,
                  resampling: str = "systematic", bandwidth_scale: float = 1.0,

@@ -26,6 +26,7 @@ Tracker TOML::
     bearings = "bearings"     # products group (default: the only group of kind bearings)
     nav = "rec.h5"            # optional: recording with /nav (default: the products' source)
     cone_gate = [20.0, 160.0] # optional: only rows with cone angles in [lo, hi] deg
+    level = "spl_db"          # optional (rpf): received levels from this bearings column
     [tracker.params]          # filter parameters, e.g. alpha/beta/kappa, gh_order, likelihood
 
 One target is tracked: at each time the row with the highest ``snr_db`` (else ``level_db``) is
@@ -61,7 +62,7 @@ else:  # pragma: no cover
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
 _KEYS = {"filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings", "nav",
-         "params", "cone_gate", *_PRIOR_KEYS}
+         "params", "cone_gate", "level", *_PRIOR_KEYS}
 
 
 def load_tracker_config(path: str) -> dict[str, Any]:
@@ -97,6 +98,13 @@ def load_tracker_config(path: str) -> dict[str, Any]:
         raise ConfigError(f"{path}: tracker.side must be 'port' or 'starboard' when lr = false")
     if not isinstance(cfg["params"], dict):
         raise ConfigError(f"{path}: tracker.params must be a table")
+    if "level" in cfg:
+        if not isinstance(cfg["level"], str):
+            raise ConfigError(f"{path}: tracker.level must name a bearings column, e.g. "
+                              "'spl_db'")
+        if not getattr(FILTERS[cfg["filter"]], "uses_levels", False):
+            raise ConfigError(f"{path}: tracker.level needs a filter that uses levels "
+                              f"(rpf), not {cfg['filter']!r}")
     if "cone_gate" in cfg:
         g = cfg["cone_gate"]
         if (not isinstance(g, list) or len(g) != 2
@@ -114,7 +122,8 @@ def load_tracker_config(path: str) -> dict[str, Any]:
 
 
 def _read_bearings(prod: dict, name: str | None, products_path: str,
-                   cone_gate: list[float] | None = None) -> dict[str, np.ndarray]:
+                   cone_gate: list[float] | None = None,
+                   level: str | None = None) -> dict[str, np.ndarray]:
     groups = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "bearings"]
     if name is not None:
         if name not in prod or name == "/":
@@ -131,8 +140,12 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
         if k not in g:
             raise FormatError(f"{products_path}: bearings column {k!r} is missing")
     t = np.asarray(g["time"], float).reshape(-1)
+    if level is not None and level not in g:
+        raise FormatError(f"{products_path}: bearings column {level!r} (tracker.level) is "
+                          "missing")
+    names = ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db")
     cols = {k: np.asarray(g[k], float).reshape(-1) for k in
-            ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db") if k in g}
+            names + ((level,) if level and level not in names else ()) if k in g}
     if any(v.shape != t.shape for v in cols.values()):
         raise FormatError(f"{products_path}: bearings columns have unequal lengths")
     if t.size < 2:
@@ -239,8 +252,10 @@ def assign_by_continuity(port: np.ndarray, stbd: np.ndarray) -> np.ndarray:
 
 
 def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
-                   cfg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Run the configured filter (one hypothesis per column of zs_rad) over the bearings.
+                   cfg: dict[str, Any], levels_db: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Run the configured filter (one hypothesis per column of zs_rad) over the bearings;
+    ``levels_db`` (K,) received levels for filters that use them (the RPF).
 
     Returns the combined state (K, n) (eq. (12)), covariance (K, n, n) (eq. (13)), weights
     (K, n_hyp) and the kernel status (bit 4: every hypothesis diverged)."""
@@ -279,7 +294,8 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
         if k > 0:
             try:
                 lr.step(times[k] - times[k - 1], own[k - 1], own[k],
-                        np.degrees(zs_rad[k]).tolist())
+                        np.degrees(zs_rad[k]).tolist(),
+                        None if levels_db is None else float(levels_db[k]))
             except FilterDivergence:
                 xs[k:], Ps[k:], ws[k:] = xs[k - 1], Ps[k - 1], ws[k - 1]
                 return xs, Ps, ws, 4
@@ -297,7 +313,8 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
-    b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"))
+    b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"),
+                       cfg.get("level"))
     src = cfg.get("nav") or _s(prod["/"].get("source", ""))
     if not src:
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
@@ -316,7 +333,8 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
     if progress:
         print(f"tracking {t.size} bearings with {cfg['filter'].upper()}"
               f"{' + L-R resolution' if cfg['lr'] else ''}", file=sys.stderr)
-    xs, Ps, ws, status = track_bearings(t, zs, own, cfg)
+    xs, Ps, ws, status = track_bearings(t, zs, own, cfg,
+                                        b[cfg["level"]] if "level" in cfg else None)
     n_ok = t.size
     if status & 4:
         last = np.flatnonzero(np.any(ws > 0, axis=1))
