@@ -21,21 +21,8 @@ from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 from arrayproc.track.filters import UKF
 from arrayproc.track.init import init_from_bearing
-from arrayproc.track.models import constant_velocity
+from arrayproc.track.models import bearing_residual, bearing_sigma_mean, constant_velocity
 from arrayproc.track.montecarlo import LRScenario, run_case
-
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def _z_mean(sigmas, wm):
-    z = np.asarray(sigmas)[:, 0]
-    return np.array([_wrap(z[0] + np.dot(wm, _wrap(z - z[0])))])
-
-
-def _residual(a, b):
-    return _wrap(np.asarray(a) - np.asarray(b))
 
 
 def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
@@ -55,8 +42,8 @@ def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
     t0 = time.perf_counter()
     for r in range(y1.shape[0]):
         x0, P0 = init_from_bearing(math.degrees(y1[r, 0]), g["own"][0], scn.prior, 4)
-        f = UnscentedKalmanFilter(4, 1, scn.dt, hx, fx, pts, z_mean_fn=_z_mean,
-                                  residual_z=_residual)
+        f = UnscentedKalmanFilter(4, 1, scn.dt, hx, fx, pts, z_mean_fn=bearing_sigma_mean,
+                                  residual_z=bearing_residual)
         f.x, f.P, f.R, f.Q = x0, P0, R, Q
         for k in range(1, y1.shape[1]):
             f.predict(o0=g["own"][k - 1], o1=g["own"][k])

@@ -104,21 +104,23 @@ def test_framebuffer_is_independent_of_block_cuts(n, cuts, nfft, hop):
         assert np.array_equal(frames[j], x[s0:s0 + nfft])
 
 
+def run_segment(path, text, group, out, t0=None, t1=None):
+    """Run a chain over [t0, t1) s of a recording (all of it by default); one products group."""
+    win = None if t0 is None else (t0, t1)
+    with Recording(path) as r, ProductsWriter(out, time_window=win) as w:
+        run_chain(r, build_chain(text), w, t0, t1)
+    return read_products(out)[group]
+
+
 def test_segments_concatenate_to_the_full_run(tmp_path, rng):
     """Two segments run independently give exactly the rows of one run over the whole file."""
     x = rng.standard_normal((64 * 40, 3)).astype(np.float32)
     p = write_recording(tmp_path / "r.h5", x, fs=640.0)
     text = '[input]\nblock = 64\n' + POWER
 
-    def run(out, t0=None, t1=None):
-        spec = build_chain(text)
-        win = None if t0 is None else (t0, t1)
-        with Recording(p) as r, ProductsWriter(out, time_window=win) as w:
-            run_chain(r, spec, w, t0, t1)
-        return read_products(out)["power"]
-    full = run(tmp_path / "full.h5")
-    a = run(tmp_path / "a.h5", 0.0, 2.0)
-    b = run(tmp_path / "b.h5", 2.0, 4.0)
+    full = run_segment(p, text, "power", tmp_path / "full.h5")
+    a = run_segment(p, text, "power", tmp_path / "a.h5", 0.0, 2.0)
+    b = run_segment(p, text, "power", tmp_path / "b.h5", 2.0, 4.0)
     assert np.array_equal(np.concatenate([a["time"], b["time"]]), full["time"])
     assert np.array_equal(np.concatenate([a["power_db"], b["power_db"]]), full["power_db"])
 
@@ -171,15 +173,9 @@ type = "btr"
     with Recording(p) as r:
         assert warmup_margin(spec, r.fs) >= 4 * 128 / 1024.0 + 256 / 1024.0
 
-    def run(out, t0=None, t1=None):
-        s = build_chain(text)
-        win = None if t0 is None else (t0, t1)
-        with Recording(p) as r, ProductsWriter(out, time_window=win) as w:
-            run_chain(r, s, w, t0, t1)
-        return read_products(out)["btr"]
-    full = run(tmp_path / "full.h5")
-    a = run(tmp_path / "a.h5", 0.0, 17.3)
-    b = run(tmp_path / "b.h5", 17.3, 40.0)
+    full = run_segment(p, text, "btr", tmp_path / "full.h5")
+    a = run_segment(p, text, "btr", tmp_path / "a.h5", 0.0, 17.3)
+    b = run_segment(p, text, "btr", tmp_path / "b.h5", 17.3, 40.0)
     assert np.allclose(np.concatenate([a["time"], b["time"]]), full["time"])
     assert np.allclose(np.concatenate([a["power_db"], b["power_db"]]), full["power_db"],
                        atol=1e-3)

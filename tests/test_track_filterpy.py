@@ -7,27 +7,19 @@ import math
 import numpy as np
 import pytest
 
+from arrayproc.kinematics import wrap_pi
 from arrayproc.track.filters import UKF
 from arrayproc.track.init import init_from_bearing
-from arrayproc.track.models import constant_turn, constant_velocity
+from arrayproc.track.models import (
+    bearing_residual,
+    bearing_sigma_mean,
+    constant_turn,
+    constant_velocity,
+)
 from arrayproc.track.montecarlo import LRScenario
 
 filterpy = pytest.importorskip("filterpy")
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter  # noqa: E402
-
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def _z_mean(sigmas, wm):
-    """Weighted mean of bearings unwrapped about the first point (same rule as ours)."""
-    z = np.asarray(sigmas)[:, 0]
-    return np.array([_wrap(z[0] + np.dot(wm, _wrap(z - z[0])))])
-
-
-def _residual(a, b):
-    return _wrap(np.asarray(a) - np.asarray(b))
 
 
 def _rel(a, b):
@@ -45,7 +37,7 @@ def test_ukf_matches_filterpy_step_by_step(case, alpha, beta, kappa):
     ours = UKF(model, scn.sigma_deg, alpha=alpha, beta=beta, kappa=kappa)
     rng = np.random.default_rng(7)
     theta = np.arctan2(g["rel"][:, 0], g["rel"][:, 1])
-    z = _wrap(theta + rng.standard_normal(theta.size) * math.radians(scn.sigma_deg))
+    z = wrap_pi(theta + rng.standard_normal(theta.size) * math.radians(scn.sigma_deg))
     x0, P0 = init_from_bearing(math.degrees(z[0]), g["own"][0], scn.prior, n)
     ours.initialize(x0, P0)
 
@@ -58,7 +50,7 @@ def test_ukf_matches_filterpy_step_by_step(case, alpha, beta, kappa):
         return np.array([math.atan2(x[0], x[1])])
 
     fp = UnscentedKalmanFilter(dim_x=n, dim_z=1, dt=scn.dt, hx=hx, fx=fx, points=pts,
-                               z_mean_fn=_z_mean, residual_z=_residual)
+                               z_mean_fn=bearing_sigma_mean, residual_z=bearing_residual)
     fp.x = x0.copy()
     fp.P = P0.copy()
     fp.R = np.array([[math.radians(scn.sigma_deg) ** 2]])

@@ -379,6 +379,20 @@ def bandwidth(n):
 
 
 @njit(cache=True)
+def _resample_regularise(parts, w, s, idx, src, dmat, h, state, resample_method):
+    """Resample (systematic or multinomial) and jitter with the Epanechnikov kernel (SPL paper
+    eqs. (21)-(28)); weights become uniform. Returns the new weight sum, N."""
+    if resample_method == 0:
+        systematic_resample(w, s, idx, state)
+    else:
+        multinomial_resample(w, s, idx, state)
+    src[:, :] = parts
+    regularise(parts, src, idx, dmat, h, state)
+    w[:] = 1.0
+    return float(parts.shape[0])
+
+
+@njit(cache=True)
 def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, n_thr,
             sigma_a, sig_theta, sig_level, prior, sl_par, tl_r0, tl_dr, tl, resample_method,
             h_scale, est, cov, resampled):
@@ -427,14 +441,7 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
         _moments(parts, w, s, mean, pcov)
         resampled[k] = False
         if neff < n_thr * n and cholesky4(pcov, dmat):
-            if resample_method == 0:
-                systematic_resample(w, s, idx, state)
-            else:
-                multinomial_resample(w, s, idx, state)
-            src[:, :] = parts
-            regularise(parts, src, idx, dmat, h, state)
-            w[:] = 1.0
-            s = float(n)
+            s = _resample_regularise(parts, w, s, idx, src, dmat, h, state, resample_method)
             resampled[k] = True
             _moments(parts, w, s, mean, pcov)
         est[k, :] = mean
@@ -459,14 +466,7 @@ def rpf_step(parts, w, w_new, s, ll, state, dt, sigma_a, obs_x, obs_y, theta, si
     _moments(parts, w, s, mean, pcov)
     done = False
     if neff < n_thr * n and cholesky4(pcov, dmat):
-        if resample_method == 0:
-            systematic_resample(w, s, idx, state)
-        else:
-            multinomial_resample(w, s, idx, state)
-        src[:, :] = parts
-        regularise(parts, src, idx, dmat, h, state)
-        w[:] = 1.0
-        s = float(n)
+        s = _resample_regularise(parts, w, s, idx, src, dmat, h, state, resample_method)
         done = True
         _moments(parts, w, s, mean, pcov)
     return s, logev, done

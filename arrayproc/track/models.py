@@ -111,3 +111,15 @@ def port_starboard(bearing_rad_: np.ndarray, heading_rad: np.ndarray) -> tuple[n
     port = wrap_pi(heading_rad - cone)
     stbd = wrap_pi(heading_rad + cone)
     return port, stbd, d >= 0.0
+
+
+def bearing_sigma_mean(sigmas: np.ndarray, wm: np.ndarray) -> np.ndarray:
+    """Weighted mean of sigma-point bearings (rad, first column), unwrapped about the first
+    point — the rule our UKF uses; a ``z_mean_fn`` for other UKF libraries (filterpy)."""
+    z = np.asarray(sigmas)[:, 0]
+    return np.array([wrap_pi(z[0] + np.dot(wm, wrap_pi(z - z[0])))])
+
+
+def bearing_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Bearing difference wrapped to [−π, π) (a ``residual_z`` for other UKF libraries)."""
+    return wrap_pi(np.asarray(a) - np.asarray(b))
