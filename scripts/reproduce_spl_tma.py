@@ -7,7 +7,7 @@ bearings-only (BOT) and bearings + SPL. Prints the paper's numbers next to ours.
 Usage:
   python scripts/reproduce_spl_tma.py --scenario manoeuvring|parallel|static --runs N
          [--particles 5000] [--seed 1] [--resampling systematic|multinomial]
-         [--json OUT] [--plot DIR]
+         [--course-prior uniform|normal] [--max-speed-kn V] [--json OUT] [--plot DIR]
 """
 
 from __future__ import annotations
@@ -90,6 +90,12 @@ def main(argv: list[str] | None = None) -> dict:
                     help="multiplier of the MISE-optimal bandwidth (paper: 1)")
     ap.add_argument("--sigma-a", type=float, default=None,
                     help="filter process noise, m/s^2 (paper: 1.5e-3)")
+    ap.add_argument("--course-prior", default="uniform", choices=["uniform", "normal"],
+                    help="prior course about z0 + pi with std pi/sqrt(12): uniform over a "
+                         "half circle (default) or normal")
+    ap.add_argument("--max-speed-kn", type=float, default=0.0,
+                    help="zero weight for particles faster than this (not in the paper; "
+                         "0: off)")
     ap.add_argument("--tl", default="munk_bellhopcxx_incoherent",
                     help="bundled TL table in data/tl (without .h5)")
     ap.add_argument("--grid-check", type=int, default=0,
@@ -106,6 +112,7 @@ def main(argv: list[str] | None = None) -> dict:
                  "seed": args.seed, "resampling": args.resampling,
                  "bandwidth_scale": args.bandwidth_scale,
                  "sigma_a": 1.5e-3 if args.sigma_a is None else args.sigma_a, "tl": args.tl,
+                 "course_prior": args.course_prior, "max_speed_kn": args.max_speed_kn,
                  "threads": numba.get_num_threads(),
                  "tl_table": str(tab.attrs.get("description", ""))}
     rm = {}
@@ -114,7 +121,8 @@ def main(argv: list[str] | None = None) -> dict:
                         resampling=args.resampling, bandwidth_scale=args.bandwidth_scale,
                         sigma_a=1.5e-3 if args.sigma_a is None else args.sigma_a,
                         sigma_bearing_deg=sc.sigma_bearing_deg,
-                        sigma_level_db=sc.sigma_level_filter_db)
+                        sigma_level_db=sc.sigma_level_filter_db,
+                        course_prior=args.course_prior, max_speed_kn=args.max_speed_kn)
         f = RegularizedParticleFilter(cfg)
         f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3],
                    data.levels_db[:1, :3] if use else None)          # compile outside timing
@@ -187,8 +195,16 @@ def main(argv: list[str] | None = None) -> dict:
         d = Path(args.plot)
         d.mkdir(parents=True, exist_ok=True)
         tag = sc.name
+        notes = []
         if args.bandwidth_scale != 1.0 or args.sigma_a is not None:
             tag += f"_h{args.bandwidth_scale:g}_sa{out['sigma_a']:g}"
+            notes += [f"h × {args.bandwidth_scale:g}", f"σ_a = {out['sigma_a']:g} m/s²"]
+        if args.course_prior != "uniform":
+            tag += f"_course_{args.course_prior}"
+            notes.append(f"{args.course_prior} course prior")
+        if args.max_speed_kn > 0:
+            tag += f"_vmax{args.max_speed_kn:g}kn"
+            notes.append(f"speed ≤ {args.max_speed_kn:g} kn")
         pts = {}
         if PAPER[sc.name]:
             ts = [v[0] for v in PAPER[sc.name].values()]
@@ -197,8 +213,7 @@ def main(argv: list[str] | None = None) -> dict:
         plot_rmse_curves(tmin, {"BOT (RPF)": rm["bot"], "bearings + SPL (RPF)": rm["spl"]},
                          str(d / f"spl_tma_rmse_{tag}.png"), crlb=crlb,
                          title=f"{sc.name} observer, {args.runs} runs, N = {args.particles}"
-                         + ("" if tag == sc.name else f" (h × {args.bandwidth_scale:g}, "
-                            f"σ_a = {out['sigma_a']:g} m/s²)"),
+                         + ("" if tag == sc.name else " (" + ", ".join(notes) + ")"),
                          paper_points=pts)
         plot_scenario_geometry(data.truth, data.observer_pos,
                                str(d / f"spl_tma_geometry_{sc.name}.png"),

@@ -70,11 +70,18 @@ class Stream:
 
 
 def prior(st: Stream, n, obs0, theta0, sig_theta, pr):
-    z = np.array([np.concatenate([st.normal_pair(), st.normal_pair()]) for _ in range(n)])
+    uniform = len(pr) > 7 and pr[7] != 0
+    z = np.empty((n, 5))
+    for i in range(n):  # per particle: two normal pairs, then the course's uniform if used
+        z[i, :4] = np.concatenate([st.normal_pair(), st.normal_pair()])
+        z[i, 4] = st.uniform() if uniform else 0.0
     r = np.maximum(pr[0] + pr[1] * z[:, 0], pr[6])
     b = theta0 + sig_theta * z[:, 1]
     s = pr[2] + pr[3] * z[:, 2]
-    c = theta0 + pr[4] + pr[5] * z[:, 3]
+    if uniform:  # same mean and standard deviation as the normal course prior
+        c = theta0 + pr[4] + math.sqrt(3.0) * pr[5] * (2.0 * z[:, 4] - 1.0)
+    else:
+        c = theta0 + pr[4] + pr[5] * z[:, 3]
     return np.stack([obs0[0] + r * np.sin(b), obs0[1] + r * np.cos(b), s * np.sin(c),
                      s * np.cos(c)], axis=1)
 
@@ -146,6 +153,10 @@ def rpf(theta, level, use_level, times, obs, seed, n, n_thr, sigma_a, sig_theta,
         if ut or use_level:
             ll = loglik(x, obs[k], theta[k], sig_theta, level[k], sig_level, ut, use_level,
                         sl_par, tl_prof)
+            v_max = pr[8] if len(pr) > 8 else 0.0
+            fast = np.hypot(x[:, 2], x[:, 3]) > v_max
+            if v_max > 0 and np.any(~fast & (w > 0)):
+                ll[fast] = -np.inf
             w = w * np.exp(ll - ll.max())
             w = w / w.sum()
             neff = 1.0 / np.sum(w**2)

@@ -224,3 +224,51 @@ def test_monte_carlo_is_reproducible_and_thread_independent():
               np.zeros(times.size, np.bool_))
     assert one.tobytes() == a[2].tobytes()
     assert not np.array_equal(a[0], a[1])        # different seeds, different runs
+
+
+@pytest.mark.parametrize("use_level", [False, True])
+def test_rpf_uniform_course_and_speed_gate_match_numpy_reference(use_level):
+    """The uniform course prior and the speed gate (prior[7], prior[8]) against the reference;
+    a 2.5 m/s gate rejects a good share of the 1.54 ± 1.03 m/s prior."""
+    times, obs, theta, level, prior = _run_setup()
+    pr = np.concatenate([prior, [1.0, 2.5]])
+    n = 300
+    est = np.empty((times.size, 4))
+    cov = np.empty((times.size, 4, 4))
+    flags = np.zeros(times.size, np.bool_)
+    k.rpf_run(theta, level, False, use_level, times, obs, np.uint64(SEED), n, 1 / 3, 1.5e-3,
+              0.02, 10.0, pr, SL, *TL, 0, 1.0, est, cov, flags)
+    er, cr, fr = ref.rpf(theta, level, use_level, times, obs, SEED, n, 1 / 3, 1.5e-3, 0.02,
+                         10.0, pr, SL, TL, "systematic")
+    np.testing.assert_array_equal(flags, fr)
+    np.testing.assert_allclose(est, er, rtol=1e-8, atol=1e-6)
+    np.testing.assert_allclose(cov, cr, rtol=1e-6, atol=1e-6 * np.abs(cr).max())
+    assert np.all(np.hypot(est[1:, 2], est[1:, 3]) < 2.5)  # the estimate respects the gate
+
+
+def test_uniform_course_prior_moments():
+    """Uniform course draws: mean θ0 + offset, standard deviation course_std, support ±√3·std."""
+    n = 40000
+    parts = np.empty((n, 4))
+    st = np.array([SEED], np.uint64)
+    std = math.pi / math.sqrt(12.0)
+    k.init_polar_prior(parts, st, 0.0, 0.0, 0.3, 0.01, 10e3, 1.0, 2.0, 1e-9, 0.3 + math.pi,
+                       std, 100.0, True)
+    c = np.arctan2(parts[:, 2], parts[:, 3])
+    d = np.mod(c - (0.3 + math.pi) + math.pi, 2 * math.pi) - math.pi
+    assert abs(d.mean()) < 0.01
+    assert abs(d.std() - std) < 0.01
+    assert np.abs(d).max() <= math.pi / 2 + 1e-9
+
+
+def test_speed_gate_never_rejects_every_particle():
+    parts = np.zeros((4, 4))
+    parts[:, 2] = [1.0, 2.0, 3.0, 4.0]
+    ll = np.array([-1.0, -2.0, -3.0, -0.5])
+    w = np.ones(4)
+    m = k.speed_gate(parts, w, ll, 2.5, ll.max())
+    assert m == -1.0 and np.isneginf(ll[2:]).all() and ll[0] == -1.0
+    ll2 = np.array([-1.0, -2.0, -3.0, -0.5])
+    w[:2] = 0.0  # the only particles inside the gate carry no weight: leave everything alone
+    assert k.speed_gate(parts, w, ll2, 2.5, -0.5) == -0.5 and np.all(np.isfinite(ll2))
+    assert k.speed_gate(parts, np.ones(4), ll2, 0.0, -0.5) == -0.5  # off

@@ -126,10 +126,14 @@ def epanechnikov_block(state, n):
 
 @njit(cache=True)
 def init_polar_prior(parts, state, obs_x, obs_y, bearing0, sig_bearing, range_mean, range_std,
-                     speed_mean, speed_std, course_mean, course_std, min_range):
-    """Draw the prior of Ristic et al. 2003 ch. 6.4.1.1 (SPL paper section 5): range, bearing,
-    speed and course Gaussian; position relative to the observer, velocity absolute."""
+                     speed_mean, speed_std, course_mean, course_std, min_range,
+                     course_uniform=False):
+    """Draw the prior of Ristic et al. 2003 ch. 6.4.1.1 (SPL paper section 5): range, bearing
+    and speed Gaussian; course Gaussian, or with ``course_uniform`` uniform with the same mean
+    and standard deviation (course_mean ± √3·course_std: ± 90° for the paper's π/√12, the
+    standard deviation of a uniform over a half circle). Absolute positions and velocities."""
     n = parts.shape[0]
+    half = math.sqrt(3.0) * course_std
     for i in range(n):
         zr, zb = rand_normal_pair(state)
         zs, zc = rand_normal_pair(state)
@@ -138,7 +142,10 @@ def init_polar_prior(parts, state, obs_x, obs_y, bearing0, sig_bearing, range_me
             r = min_range
         b = bearing0 + sig_bearing * zb
         s = speed_mean + speed_std * zs
-        c = course_mean + course_std * zc
+        if course_uniform:
+            c = course_mean + half * (2.0 * rand_uniform(state) - 1.0)
+        else:
+            c = course_mean + course_std * zc
         parts[i, 0] = obs_x + r * math.sin(b)
         parts[i, 1] = obs_y + r * math.cos(b)
         parts[i, 2] = s * math.sin(c)
@@ -373,6 +380,32 @@ def regularise(parts, src, idx, dmat, h, state):
 
 
 @njit(cache=True)
+def speed_gate(parts, w, ll, v_max, llmax):
+    """Hard speed constraint: particles whose speed ‖(ẋ, ẏ)‖ exceeds ``v_max`` (m/s) get zero
+    likelihood (``ll`` = −inf), unless that would leave no particle of positive weight ``w``,
+    in which case nothing changes. ``v_max`` ≤ 0 switches it off. Returns the new maximum of
+    ``ll``. Not in the SPL paper: the optional prior knowledge of a maximum target speed
+    (docs/validation.md, Tracking II)."""
+    if v_max <= 0.0:
+        return llmax
+    n = parts.shape[0]
+    v2 = v_max * v_max
+    keep = 0
+    for i in range(n):
+        if w[i] > 0.0 and parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3] <= v2:
+            keep += 1
+    if keep == 0:
+        return llmax
+    m = -np.inf
+    for i in range(n):
+        if parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3] > v2:
+            ll[i] = -np.inf
+        elif ll[i] > m:
+            m = ll[i]
+    return m
+
+
+@njit(cache=True)
 def bandwidth(n):
     """MISE-optimal bandwidth h = A(K) N^(−1/(n_x+4)), SPL paper eqs. (27)-(28), n_x = 4."""
     return A_K * n ** (-1.0 / (NX + 4))
@@ -399,7 +432,10 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
     """One RPF run over all measurement times (SPL paper section 4).
 
     ``prior`` = [range_mean, range_std, speed_mean, speed_std, course_offset, course_std,
-    min_range]; the prior bearing is θ₀ and the course mean θ₀ + course_offset. At k = 0 the
+    min_range(, course_uniform, v_max)]; the prior bearing is θ₀ and the course mean θ₀ +
+    course_offset; ``course_uniform`` (1/0, default 0) draws the course uniformly (see
+    :func:`init_polar_prior`) and ``v_max`` (m/s, default 0 = none) applies
+    :func:`speed_gate` at every weighting. At k = 0 the
     particles are drawn from the prior (which already uses θ₀) and weighted by l₀ if levels are
     used (and by θ₀ if ``use_theta0``); from k = 1: prediction, update, regularization-
     resampling when N_eff < N_thr·N (D from the weighted covariance before resampling), and
@@ -422,8 +458,11 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
     pcov = np.empty((NX, NX))
     dmat = np.empty((NX, NX))
     h = h_scale * bandwidth(n)
+    course_uniform = prior.shape[0] > 7 and prior[7] != 0.0
+    v_max = prior[8] if prior.shape[0] > 8 else 0.0
     init_polar_prior(parts, state, obs[0, 0], obs[0, 1], theta[0], sig_theta, prior[0],
-                     prior[1], prior[2], prior[3], theta[0] + prior[4], prior[5], prior[6])
+                     prior[1], prior[2], prior[3], theta[0] + prior[4], prior[5], prior[6],
+                     course_uniform)
     for k in range(k_n):
         dt = times[k] - times[k - 1] if k > 0 else 0.0
         ut = use_theta0 or k > 0
@@ -432,6 +471,7 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
             llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs[k, 0], obs[k, 1],
                                    theta[k], sig_theta, level[k], sig_level, ut, use_level,
                                    sl_par, tl_r0, tl_dr, tl)
+            llmax = speed_gate(parts, w, ll, v_max, llmax)
             s, neff = reweight(w, s, ll, llmax, w_new)
             w, w_new = w_new, w
         elif dt > 0.0:
@@ -451,15 +491,17 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
 @njit(cache=True)
 def rpf_step(parts, w, w_new, s, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta,
              level, sig_level, use_level, sl_par, tl_r0, tl_dr, tl, n_thr, resample_method, h,
-             idx, src, mean, pcov, dmat):
+             idx, src, mean, pcov, dmat, v_max=0.0):
     """One RPF cycle for a step-by-step tracker (absolute particle states): prediction,
     update with the bearing (and the level if ``use_level``), regularization-resampling if
-    N_eff < N_thr·N, moments. Same kernels and draw order as :func:`rpf_run`. Returns
+    N_eff < N_thr·N, moments; ``v_max`` as in :func:`speed_gate`. Same kernels and draw
+    order as :func:`rpf_run`. Returns
     ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``; the caller adds the Gaussian normalising
     constants to get log p(z | past)."""
     n = parts.shape[0]
     llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, level,
                            sig_level, True, use_level, sl_par, tl_r0, tl_dr, tl)
+    llmax = speed_gate(parts, w, ll, v_max, llmax)
     s, neff = reweight(w, s, ll, llmax, w_new)
     w[:] = w_new
     logev = llmax + math.log(s)

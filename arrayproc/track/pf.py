@@ -42,7 +42,10 @@ class RPFConfig:
     speed_std: float = 2 * KNOT
     course_offset_deg: float = 180.0         # prior course = first bearing + offset
     course_std_deg: float = float(np.rad2deg(np.pi / np.sqrt(12.0)))
+    course_prior: str = "uniform"            # or "normal"; π/√12 is the std of U(±π/2)
     min_range_m: float = 100.0
+    max_speed_kn: float = 0.0                # > 0: zero weight above this speed (not in
+    #                                          the paper; docs/validation.md, Tracking II)
     source_level: SourceLevelModel = field(default_factory=lambda: ROSS_SURFACE_SHIP)
     tl_table: TLTable | None = None
     src_depth_m: float = 5.0
@@ -55,6 +58,10 @@ class RPFConfig:
             raise ConfigError("rpf: n_thr must be in (0, 1]")
         if self.resampling not in ("systematic", "multinomial"):
             raise ConfigError("rpf: resampling must be 'systematic' or 'multinomial'")
+        if self.course_prior not in ("uniform", "normal"):
+            raise ConfigError("rpf: course_prior must be 'uniform' or 'normal'")
+        if not self.max_speed_kn >= 0:
+            raise ConfigError("rpf: max_speed_kn must be >= 0 (0: no limit)")
         if self.use_levels and self.tl_table is None:
             raise ConfigError("rpf: use_levels needs a tl_table")
         for name in ("sigma_bearing_deg", "sigma_level_db", "range_std_m", "bandwidth_scale"):
@@ -93,7 +100,8 @@ class RegularizedParticleFilter:
         c = self.config
         return np.array([c.range_mean_m, c.range_std_m, c.speed_mean, c.speed_std,
                          np.deg2rad(c.course_offset_deg), np.deg2rad(c.course_std_deg),
-                         c.min_range_m])
+                         c.min_range_m, 1.0 if c.course_prior == "uniform" else 0.0,
+                         c.max_speed_kn * KNOT])
 
     def run_many(self, times: np.ndarray, observer_pos: np.ndarray, bearings_deg: np.ndarray,
                  levels_db: np.ndarray | None = None, seeds: np.ndarray | None = None,
@@ -156,6 +164,7 @@ class RPFTracker:
     ``data/tl`` or a path to a table file), ``update(bearing_deg, level_db)`` also weights by
     the received level (dB re 1 µPa) with ``sigma_level_db``, source level eq. (12)
     (``source_level`` = (sl0, slope, v_ref)) and TL at (``src_depth_m``, ``rcv_depth_m``).
+    ``max_speed_kn`` > 0 gives zero weight to particles faster than that (absolute speed).
     """
 
     name = "rpf"
@@ -167,7 +176,7 @@ class RPFTracker:
                  resampling: str = "systematic", bandwidth_scale: float = 1.0,
                  seed: int = 0, tl_table: str | None = None, src_depth_m: float = 5.0,
                  rcv_depth_m: float = 300.0, sigma_level_db: float = 10.0,
-                 source_level: tuple = (170.0, 53.0, 5.14)) -> None:
+                 source_level: tuple = (170.0, 53.0, 5.14), max_speed_kn: float = 0.0) -> None:
         if getattr(model, "dim", 4) != 4:
             raise ConfigError("tracker: the rpf filter supports the cv model only")
         if not sigma_deg > 0 or n_particles < 2 or not 0 < n_thr <= 1:
@@ -189,6 +198,9 @@ class RPFTracker:
             self.tl = TLTable.load(path).range_profile(src_depth_m, rcv_depth_m)
         if not self.sigma_level > 0:
             raise ConfigError("tracker: rpf sigma_level_db must be > 0")
+        if not max_speed_kn >= 0:
+            raise ConfigError("tracker: rpf max_speed_kn must be >= 0 (0: no limit)")
+        self.v_max = float(max_speed_kn) * KNOT
         self.n = int(n_particles)
         self.n_thr = float(n_thr)
         self.sigma_a = sigma_a
@@ -240,7 +252,7 @@ class RPFTracker:
                                       self.sigma, float(level_db) if use_level else 0.0,
                                       self.sigma_level, use_level, self.sl_par, r0, dr, tl,
                                       self.n_thr, self.method, self.h, idx, src, mean, pcov,
-                                      dmat)
+                                      dmat, self.v_max)
         self.parts = absolute - own_next
         self.s = s
         self.n_resampled += int(done)
