@@ -27,16 +27,19 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def transpose_into(x: np.ndarray, out: np.ndarray) -> None:
-    """``out[c, t] = x[t, c]`` for x (T, C) into out (C, T) (a view may be given), in tiles
-    so that both sides stay in cache."""
-    nt, nc = x.shape
+def window_frames(x: np.ndarray, offsets: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
+    """``out[s, c, t] = w[t] · x[offsets[s] + t, c]``: frames of the time-major stream buffer
+    ``x`` (T, C) windowed into the channel-major FFT input ``out`` (S, C, N), in tiles of 64
+    samples so that both sides stay in cache."""
+    ns, nc, n = out.shape
     tile = 64
-    for t0 in range(0, nt, tile):
-        t1 = min(nt, t0 + tile)
-        for c in range(nc):
-            for t in range(t0, t1):
-                out[c, t] = x[t, c]
+    for s in range(ns):
+        o = offsets[s]
+        for t0 in range(0, n, tile):
+            t1 = min(n, t0 + tile)
+            for c in range(nc):
+                for t in range(t0, t1):
+                    out[s, c, t] = w[t] * x[o + t, c]
 
 
 @njit(cache=True, nogil=True)

@@ -194,7 +194,8 @@ class CBF(Stage):
                              check=positive),
         "batch": Param("int", 32, "snapshots per GEMM batch (and per output block)",
                        check=positive),
-        "threads": Param("int", 0, "worker threads, each on a part of the batch's snapshots (0: all cores)"),
+        "threads": Param("int", 0, "worker threads, each on a part of the batch's snapshots "
+                         "(0: all cores)"),
     }
 
     def validate(self) -> None:
@@ -300,12 +301,12 @@ class CBF(Stage):
             out.append(self._beamform_filled(plan, part.shape[0]).copy())
         return np.concatenate(out)
 
-    def _beamform_filled(self, plan, s_n: int) -> np.ndarray:
-        """Beams of the first ``s_n`` windowed frames already in ``plan.input``: the snapshots
-        are split into one contiguous part per worker thread, and each worker runs the whole
-        path on its part (FFT, then pack → GEMM → unpack per chunk of bins) — no hand-over
-        between threads inside a batch, and the serial FFT of the earlier design is gone
-        (about 1.3x the throughput of splitting the bins, docs/performance.md)."""
+    def _beamform_filled(self, plan, s_n: int, src: tuple | None = None) -> np.ndarray:
+        """Beams of ``s_n`` snapshots: the windowed frames already in ``plan.input``, or, with
+        ``src = (buffer, offsets)``, the frames starting at ``offsets`` in the time-major stream
+        buffer (windowed by the workers). The snapshots are split into one contiguous part per
+        worker thread, and each worker runs the whole path on its part (windowing, FFT, then
+        pack → GEMM → unpack per chunk of bins): no serial step inside a batch."""
         n_thr = self.threads or (os.cpu_count() or 1)
         y = self._out_buffer((s_n, self._bins.size, self._uidx.size))
         n_parts = max(1, min(n_thr, s_n))
@@ -314,17 +315,20 @@ class CBF(Stage):
         if n_parts == 1:
             old = set_local_threads(1)
             try:
-                self._beamform_rows(plan, 0, s_n, y)
+                self._beamform_rows(plan, 0, s_n, y, src)
             finally:
                 if old is not None:
                     set_local_threads(old)
         else:
-            list(_pool(n_parts).map(lambda ab: self._beamform_rows(plan, ab[0], ab[1], y),
+            list(_pool(n_parts).map(lambda ab: self._beamform_rows(plan, ab[0], ab[1], y, src),
                                     parts))
         return y
 
-    def _beamform_rows(self, plan, a: int, b: int, y: np.ndarray) -> None:
+    def _beamform_rows(self, plan, a: int, b: int, y: np.ndarray,
+                       src: tuple | None = None) -> None:
         """Snapshots ``a:b`` of the batch into ``y[a:b]`` (one worker's part)."""
+        if src is not None:
+            kb.window_frames(src[0], src[1][a:b], self._win_cast(plan), plan.input[a:b])
         spec = plan.rows(a, b)  # (ns, C, F_all)
         first = int(self._bins[0])
         if not self._contig:
@@ -375,11 +379,20 @@ class CBF(Stage):
             return rec.nav.at(times)[1]
         return np.full(times.shape, fallback)
 
+    def _win_cast(self, plan) -> np.ndarray:
+        w = self.__dict__.get("_winc")
+        if w is None or w.dtype != plan.input.dtype:
+            w = self._winc = self._win.astype(plan.input.dtype)
+        return w
+
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         # Frames on the stream's absolute sample grid (frame k starts at sample k·hop, as
-        # chain.FrameBuffer), windowed straight into the FFT plan's input rows.
-        buf: np.ndarray | None = None
-        buf_start = 0  # absolute sample index of buf[0]
+        # chain.FrameBuffer). The samples of the pending frames wait, time-major as they come,
+        # in a buffer of one batch's span; the workers window and transpose their frames from
+        # it when the batch is full (no serial per-frame work in this loop).
+        buf: np.ndarray | None = None  # (capacity, C) raw samples; buf[0] is sample buf_start
+        fill = 0
+        buf_start = 0
         nxt = 0  # absolute sample index of the next frame's start
         starts: list[int] = []
         plan = None
@@ -391,7 +404,7 @@ class CBF(Stage):
             nonlocal index
             st = np.asarray(starts, np.int64)
             starts.clear()
-            y = self._beamform_filled(plan, st.size)
+            y = self._beamform_filled(plan, st.size, (buf, st - buf_start))
             fs = last.fs
             times = (st + 0.5 * nfft) / fs
             heading = last.pose.heading if last.pose is not None else 0.0
@@ -406,6 +419,16 @@ class CBF(Stage):
             index += y.shape[0]
             return out
 
+        def compact() -> None:
+            """Drop the buffered samples before the first pending (or next) frame."""
+            nonlocal fill, buf_start
+            keep_from = starts[0] if starts else nxt
+            drop = min(max(0, keep_from - buf_start), fill)
+            if drop:
+                buf[:fill - drop] = buf[drop:fill]
+                fill -= drop
+                buf_start += drop
+
         for b in blocks:
             if b.domain != ("time", "channel"):
                 raise ConfigError(f"stage {self.name!r}: needs time-domain input, got "
@@ -419,33 +442,34 @@ class CBF(Stage):
                 buf = None
             self._prepare(b)
             plan = self._plan(b.data.shape[1])
-            win = self._win.astype(plan.input.dtype)
             last = b
-            # channel-major copy of the block after the kept tail (each sample transposed
-            # once, not once per frame)
             x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
             s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
-            if buf is None or buf_start + buf.shape[1] != s0:  # start, or a gap in the stream
-                keep = 0
+            if buf is None or buf_start + fill != s0:  # start, or a gap in the stream
+                if starts:
+                    yield emit()
+                buf = np.empty(((self.batch - 1) * hop + nfft, x.shape[1]), plan.input.dtype)
+                fill = 0
                 buf_start = s0
                 nxt = max(nxt, -(-s0 // hop) * hop)
-            else:
-                keep = buf.shape[1]
-            new = np.empty((x.shape[1], keep + x.shape[0]), plan.input.dtype)
-            if keep:
-                new[:, :keep] = buf
-            kb.transpose_into(x.astype(plan.input.dtype, copy=False), new[:, keep:])
-            buf = new
-            while nxt + nfft <= buf_start + buf.shape[1]:
-                off = nxt - buf_start
-                np.multiply(buf[:, off:off + nfft], win, out=plan.input[len(starts)])
-                starts.append(nxt)
-                nxt += hop
-                if len(starts) == self.batch:
-                    yield emit()
-            drop = min(max(0, nxt - buf_start), buf.shape[1])
-            buf = buf[:, drop:]
-            buf_start += drop
+            pos, n = 0, x.shape[0]
+            while pos < n:
+                if fill == 0 and buf_start < nxt:  # samples before the next frame: skip
+                    skip = min(nxt - buf_start, n - pos)
+                    pos += skip
+                    buf_start += skip
+                    continue
+                take = min(n - pos, buf.shape[0] - fill)
+                buf[fill:fill + take] = x[pos:pos + take]
+                fill += take
+                pos += take
+                while nxt + nfft <= buf_start + fill:
+                    starts.append(nxt)
+                    nxt += hop
+                    if len(starts) == self.batch:
+                        yield emit()
+                if fill == buf.shape[0] or not starts:
+                    compact()
         if starts and last is not None:
             yield emit()
 
