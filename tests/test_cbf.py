@@ -403,3 +403,33 @@ name = "btr_{k}"
         n = (p.shape[0] // 8) * 8
         want = 10 * np.log10(p[:n].reshape(-1, 8, *p.shape[1:]).sum(1).sum(1) / 1e-12)
         assert np.allclose(g[f"btr_{k}"]["power_db"], want, atol=1e-3)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 6), st.integers(1, 9), st.integers(8, 200), st.integers(0, 2**31 - 1))
+def test_window_frames_against_numpy(n_frames, n_ch, n, seed):
+    """kernels.beamform.window_frames: frames gathered from the time-major buffer, windowed
+    and transposed to channel-major, equal to numpy fancy indexing."""
+    g = np.random.default_rng(seed)
+    x = g.standard_normal((n + 3 * n_frames + 5, n_ch)).astype(np.float32)
+    offs = np.sort(g.integers(0, x.shape[0] - n + 1, n_frames)).astype(np.int64)
+    w = g.standard_normal(n).astype(np.float32)
+    out = np.empty((n_frames, n_ch, n), np.float32)
+    kb.window_frames(x, offs, w, out)
+    ref = (x[offs[:, None] + np.arange(n)[None, :]] * w[None, :, None]).transpose(0, 2, 1)
+    np.testing.assert_array_equal(out, ref)
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_output_independent_of_threads_and_batch(rng, threads):
+    """Splitting a batch's snapshots over workers changes nothing, for any batch size."""
+    fs, n_h = 4096.0, 12
+    pos = line_array(n_h, 0.4)
+    x = rng.standard_normal((12000, n_h))
+    ref = None
+    for batch in (1, 4, 7, 32):
+        _, y, _ = run_cbf(x, fs, pos, sizes=(777, 4000), nfft=256, hop=100, window="hann",
+                          band=[200.0, 1500.0], batch=batch, threads=threads)
+        if ref is None:
+            ref = y
+        np.testing.assert_array_equal(y, ref)
