@@ -422,7 +422,8 @@ def test_window_frames_against_numpy(n_frames, n_ch, n, seed):
 
 @pytest.mark.parametrize("threads", [1, 2, 3])
 def test_output_independent_of_threads_and_batch(rng, threads):
-    """Splitting a batch's snapshots over workers changes nothing, for any batch size."""
+    """Splitting a batch's snapshots over workers changes nothing but float32 rounding (BLAS
+    blocks GEMMs of different row counts differently), for any batch size."""
     fs, n_h = 4096.0, 12
     pos = line_array(n_h, 0.4)
     x = rng.standard_normal((12000, n_h))
@@ -432,4 +433,5 @@ def test_output_independent_of_threads_and_batch(rng, threads):
                           band=[200.0, 1500.0], batch=batch, threads=threads)
         if ref is None:
             ref = y
-        np.testing.assert_array_equal(y, ref)
+        assert y.shape == ref.shape
+        assert np.max(np.abs(y - ref)) < 1e-6 * np.max(np.abs(ref))
