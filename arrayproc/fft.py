@@ -10,8 +10,6 @@ shapes the stages use (e.g. a 256-point inverse FFT of 1021 rows: 0.33 ms with o
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 import scipy.fft as _sfft
 
@@ -24,7 +22,6 @@ except ImportError:  # pragma: no cover - pyfftw is a dependency, the fallback i
     HAVE_PYFFTW = False
 
 _threads = 1
-_plan_lock = threading.Lock()
 _plans: dict[tuple, object] = {}
 _MAX_PLANS = 64
 
@@ -149,28 +146,6 @@ class BufferedPlan:
         if self._fftw is None:
             return self._scipy()
         return self._fftw()
-
-    def rows(self, a: int, b: int) -> np.ndarray:
-        """The transform of rows ``a:b`` (first axis) of :attr:`input` only, single-threaded,
-        with the backend chosen for the whole plan: for callers that split one batch over
-        their own worker threads (each calls ``rows`` on its part). With FFTW the output is a
-        buffer of a sub-plan, overwritten by the next call for the same rows."""
-        if self.axis % self.input.ndim == 0:
-            raise ValueError("rows() needs the transform along another axis than the first")
-        if self._fftw is None:
-            return getattr(_sfft, self.kind)(self.input[a:b], axis=self.axis, workers=1)
-        sub = self.__dict__.setdefault("_sub", {})
-        p = sub.get((a, b))
-        if p is None:
-            with _plan_lock:  # FFTW's planner is not thread-safe
-                p = sub.get((a, b))
-                if p is None:
-                    p = getattr(_builders, self.kind)(
-                        self.input[a:b], axis=self.axis, threads=1,
-                        planner_effort="FFTW_ESTIMATE", overwrite_input=False, avoid_copy=True,
-                        auto_align_input=False, auto_contiguous=False)
-                    sub[(a, b)] = p
-        return p()
 
 
 _buffered: dict[tuple, BufferedPlan] = {}

@@ -28,31 +28,29 @@ from numba import njit
 
 @njit(cache=True, nogil=True)
 def window_frames(x: np.ndarray, offsets: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
-    """``out[s, c, t] = w[t] · x[offsets[s] + t, c]``: frames of the time-major stream buffer
-    ``x`` (T, C) windowed into the channel-major FFT input ``out`` (S, C, N), in tiles of 64
-    samples so that both sides stay in cache."""
-    ns, nc, n = out.shape
-    tile = 64
-    for s in range(ns):
-        o = offsets[s]
-        for t0 in range(0, n, tile):
-            t1 = min(n, t0 + tile)
+    """``out[t, s, c] = w[t] · x[offsets[s] + t, c]``: frames of the time-major stream buffer
+    ``x`` (T, C) windowed into the time-major FFT input ``out`` (N, S, C); the FFT then runs
+    along the first axis and leaves each bin's (S, C) plane contiguous for the packing."""
+    n, ns, nc = out.shape
+    for t in range(n):
+        wt = w[t]
+        for s in range(ns):
+            o = offsets[s] + t
             for c in range(nc):
-                for t in range(t0, t1):
-                    out[s, c, t] = w[t] * x[o + t, c]
+                out[t, s, c] = wt * x[o, c]
 
 
 @njit(cache=True, nogil=True)
 def pack_bins(spec: np.ndarray, first_bin: int, out: np.ndarray) -> None:
-    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (S, C, F) complex into
+    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (F, S, C) complex into
     ``out`` (nf, 2S, C) float32: rows 0..S-1 the real parts, rows S..2S-1 the imaginary."""
     nf, s2, nc = out.shape
     ns = s2 // 2
-    for s in range(ns):
-        for c in range(nc):
-            row = spec[s, c]
-            for f in range(nf):
-                v = row[first_bin + f]
+    for f in range(nf):
+        for s in range(ns):
+            row = spec[first_bin + f, s]
+            for c in range(nc):
+                v = row[c]
                 out[f, s, c] = v.real
                 out[f, ns + s, c] = v.imag
 
@@ -146,28 +144,26 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
 def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
               out_s: np.ndarray, out_d: np.ndarray) -> None:
     """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of
-    ``spec`` (S, C, F): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
+    ``spec`` (F, S, C): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
     in rows S..2S-1. A centre element (pi == pj) gives S = X, D = 0."""
     nf, s2, nk = out_s.shape
     ns = s2 // 2
-    for s in range(ns):
-        for k in range(nk):
-            i, j = pi[k], pj[k]
-            ri = spec[s, i]
-            rj = spec[s, j]
-            for f in range(nf):
-                a = ri[first_bin + f]
-                if i == j:
-                    out_s[f, s, k] = a.real
-                    out_s[f, ns + s, k] = a.imag
-                    out_d[f, s, k] = 0.0
-                    out_d[f, ns + s, k] = 0.0
-                else:
-                    b = rj[first_bin + f]
+    for f in range(nf):
+        for s in range(ns):
+            row = spec[first_bin + f, s]
+            for k in range(nk):
+                a = row[pi[k]]
+                if pj[k] != pi[k]:
+                    b = row[pj[k]]
                     out_s[f, s, k] = a.real + b.real
                     out_s[f, ns + s, k] = a.imag + b.imag
                     out_d[f, s, k] = a.real - b.real
                     out_d[f, ns + s, k] = a.imag - b.imag
+                else:
+                    out_s[f, s, k] = a.real
+                    out_s[f, ns + s, k] = a.imag
+                    out_d[f, s, k] = 0.0
+                    out_d[f, ns + s, k] = 0.0
 
 
 @njit(cache=True, nogil=True)

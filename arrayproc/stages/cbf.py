@@ -277,63 +277,66 @@ class CBF(Stage):
             -2j * np.pi * self.freqs[:, None, None] * tau[None])
 
     # -- compute -----------------------------------------------------------------------
-    def _plan(self, n_ch: int):
-        """This stage's FFT plan: (batch, C, nfft) frames, each channel's samples contiguous,
-        transform along the last axis (about 1.8x faster than along a strided axis here).
-        Owned by the stage (not the shared plan cache): frames wait in its input buffer across
-        blocks, so another CBF stage of the same shape in the chain must not share it."""
-        kind, dt = ("fft", np.complex64) if self._complex else ("rfft", np.float32)
-        key = (kind, self.batch, self.nfft, n_ch)
+    def _dtype(self) -> type:
+        return np.complex64 if self._complex else np.float32
+
+    def _part_plan(self, part: int, ns: int, n_ch: int):
+        """The FFT plan of worker ``part`` for ``ns`` frames: time-major (nfft, ns, C) input,
+        transform along the first axis, so that each bin's (ns, C) plane of the output is
+        contiguous for the packing (window + FFT + pack 0.68 ms per snapshot against 1.03 ms
+        with channel-major frames, docs/performance.md). Owned by the stage: two CBF stages of
+        the same shape in a chain must not share buffers."""
+        kind = "fft" if self._complex else "rfft"
+        key = (part, kind, ns, self.nfft, n_ch)
         plans = self.__dict__.setdefault("_plans", {})
         if key not in plans:
-            plans.clear()
-            plans[key] = fft.BufferedPlan(kind, (self.batch, n_ch, self.nfft), dt, axis=2)
+            if len(plans) > 16:
+                plans.clear()
+            plans[key] = fft.BufferedPlan(kind, (self.nfft, ns, n_ch), self._dtype(), axis=0)
         return plans[key]
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
         """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`)."""
+        s_n, n, n_ch = frames.shape
+        x = np.ascontiguousarray(frames, self._dtype()).reshape(s_n * n, n_ch)
+        offsets = np.arange(s_n, dtype=np.int64) * n
         out = []
-        for a in range(0, frames.shape[0], self.batch):
-            part = frames[a:a + self.batch]
-            plan = self._plan(frames.shape[2])
-            np.multiply(part.transpose(0, 2, 1), self._win.astype(plan.input.dtype),
-                        out=plan.input[:part.shape[0]])
-            out.append(self._beamform_filled(plan, part.shape[0]).copy())
+        for a in range(0, s_n, self.batch):
+            b = min(s_n, a + self.batch)
+            out.append(self._beamform_frames(b - a, (x, offsets[a:b])).copy())
         return np.concatenate(out)
 
-    def _beamform_filled(self, plan, s_n: int, src: tuple | None = None) -> np.ndarray:
-        """Beams of ``s_n`` snapshots: the windowed frames already in ``plan.input``, or, with
-        ``src = (buffer, offsets)``, the frames starting at ``offsets`` in the time-major stream
-        buffer (windowed by the workers). The snapshots are split into one contiguous part per
-        worker thread, and each worker runs the whole path on its part (windowing, FFT, then
-        pack → GEMM → unpack per chunk of bins): no serial step inside a batch."""
+    def _beamform_frames(self, s_n: int, src: tuple) -> np.ndarray:
+        """Beams (S, F, B) of the ``s_n`` frames starting at ``src[1]`` in the time-major buffer
+        ``src[0]`` (T, C). The snapshots are split into one contiguous part per worker thread,
+        and each worker runs the whole path on its part (windowing, FFT, then pack → GEMM →
+        unpack per chunk of bins): no serial step inside a batch."""
         n_thr = self.threads or (os.cpu_count() or 1)
         y = self._out_buffer((s_n, self._bins.size, self._uidx.size))
         n_parts = max(1, min(n_thr, s_n))
         edges = [round(i * s_n / n_parts) for i in range(n_parts + 1)]
-        parts = [(edges[i], edges[i + 1]) for i in range(n_parts)]
+        parts = [(i, edges[i], edges[i + 1]) for i in range(n_parts)]
         if n_parts == 1:
             old = set_local_threads(1)
             try:
-                self._beamform_rows(plan, 0, s_n, y, src)
+                self._beamform_part(0, 0, s_n, y, src)
             finally:
                 if old is not None:
                     set_local_threads(old)
         else:
-            list(_pool(n_parts).map(lambda ab: self._beamform_rows(plan, ab[0], ab[1], y, src),
-                                    parts))
+            list(_pool(n_parts).map(lambda p: self._beamform_part(*p, y, src), parts))
         return y
 
-    def _beamform_rows(self, plan, a: int, b: int, y: np.ndarray,
-                       src: tuple | None = None) -> None:
-        """Snapshots ``a:b`` of the batch into ``y[a:b]`` (one worker's part)."""
-        if src is not None:
-            kb.window_frames(src[0], src[1][a:b], self._win_cast(plan), plan.input[a:b])
-        spec = plan.rows(a, b)  # (ns, C, F_all)
+    def _beamform_part(self, part: int, a: int, b: int, y: np.ndarray, src: tuple) -> None:
+        """Snapshots ``a:b`` of the batch into ``y[a:b]`` (worker ``part``)."""
+        x, offsets = src
+        ns = b - a
+        plan = self._part_plan(part, ns, x.shape[1])
+        kb.window_frames(x, offsets[a:b], self._win_cast(), plan.input)
+        spec = plan()  # (F_all, ns, C)
         first = int(self._bins[0])
         if not self._contig:
-            spec, first = np.ascontiguousarray(spec[:, :, self._bins]), 0
-        ns = b - a
+            spec, first = spec[self._bins], 0
         nf = self._bins.size
         yv = y[a:b]
         steer, uidx, sign, runs, pairs = (self._steer, self._uidx, self._sign, self._runs,
@@ -344,7 +347,7 @@ class CBF(Stage):
             xs = np.empty((chunk, 2 * ns, k), np.float32)
             xd = np.empty((chunk, 2 * ns, k), np.float32)
         else:
-            x2 = np.empty((chunk, 2 * ns, spec.shape[1]), np.float32)
+            x2 = np.empty((chunk, 2 * ns, spec.shape[2]), np.float32)
         for c in range(0, nf, chunk):
             e = min(nf, c + chunk)
             if pairs is not None:
@@ -379,10 +382,10 @@ class CBF(Stage):
             return rec.nav.at(times)[1]
         return np.full(times.shape, fallback)
 
-    def _win_cast(self, plan) -> np.ndarray:
+    def _win_cast(self) -> np.ndarray:
         w = self.__dict__.get("_winc")
-        if w is None or w.dtype != plan.input.dtype:
-            w = self._winc = self._win.astype(plan.input.dtype)
+        if w is None or w.dtype != self._dtype():
+            w = self._winc = self._win.astype(self._dtype())
         return w
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -395,7 +398,6 @@ class CBF(Stage):
         buf_start = 0
         nxt = 0  # absolute sample index of the next frame's start
         starts: list[int] = []
-        plan = None
         last: Block | None = None
         index = 0
         nfft, hop = self.nfft, self.hop
@@ -404,7 +406,7 @@ class CBF(Stage):
             nonlocal index
             st = np.asarray(starts, np.int64)
             starts.clear()
-            y = self._beamform_filled(plan, st.size, (buf, st - buf_start))
+            y = self._beamform_frames(st.size, (buf, st - buf_start))
             fs = last.fs
             times = (st + 0.5 * nfft) / fs
             heading = last.pose.heading if last.pose is not None else 0.0
@@ -441,14 +443,13 @@ class CBF(Stage):
                     yield emit()  # geometry changed: flush with the old steering
                 buf = None
             self._prepare(b)
-            plan = self._plan(b.data.shape[1])
             last = b
             x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
             s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
             if buf is None or buf_start + fill != s0:  # start, or a gap in the stream
                 if starts:
                     yield emit()
-                buf = np.empty(((self.batch - 1) * hop + nfft, x.shape[1]), plan.input.dtype)
+                buf = np.empty(((self.batch - 1) * hop + nfft, x.shape[1]), self._dtype())
                 fill = 0
                 buf_start = s0
                 nxt = max(nxt, -(-s0 // hop) * hop)
