@@ -96,6 +96,9 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--max-speed-kn", type=float, default=0.0,
                     help="zero weight for particles faster than this (not in the paper; "
                          "0: off)")
+    ap.add_argument("--truth-sigma-a", type=float, default=0.0,
+                    help="drive each run's true track by white accelerations of this std "
+                         "(m/s^2; the paper's target keeps a steady course: 0)")
     ap.add_argument("--tl", default="munk_bellhopcxx_incoherent",
                     help="bundled TL table in data/tl (without .h5)")
     ap.add_argument("--grid-check", type=int, default=0,
@@ -104,15 +107,18 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--json", default=None)
     ap.add_argument("--plot", default=None, help="directory for the PNG figures")
     args = ap.parse_args(argv)
+    if args.grid_check and args.truth_sigma_a > 0:
+        ap.error("--grid-check needs the deterministic truth (--truth-sigma-a 0)")
 
     sc = get_scenario(args.scenario)
     tab = load_default_table(args.tl)
-    data = sc.simulate(args.runs, args.seed, tab)
+    data = sc.simulate(args.runs, args.seed, tab, truth_sigma_a=args.truth_sigma_a)
     out: dict = {"scenario": sc.name, "runs": args.runs, "particles": args.particles,
                  "seed": args.seed, "resampling": args.resampling,
                  "bandwidth_scale": args.bandwidth_scale,
                  "sigma_a": 1.5e-3 if args.sigma_a is None else args.sigma_a, "tl": args.tl,
                  "course_prior": args.course_prior, "max_speed_kn": args.max_speed_kn,
+                 "truth_sigma_a": args.truth_sigma_a,
                  "threads": numba.get_num_threads(),
                  "tl_table": str(tab.attrs.get("description", ""))}
     rm = {}
@@ -131,7 +137,7 @@ def main(argv: list[str] | None = None) -> dict:
                          data.levels_db if use else None,
                          seeds=run_seeds(args.seed, args.runs, tag=1 + int(use)))
         out[f"wall_s_{label}"] = time.perf_counter() - t0
-        err = sc.position_error(res.est)
+        err = sc.position_error(res.est, data.truth)
         rm[label] = rmse(err)
         out[f"resampling_fraction_{label}"] = float(res.resampled.mean())
         out[f"median_final_error_{label}_m"] = float(np.median(err[:, -1]))
@@ -205,6 +211,9 @@ def main(argv: list[str] | None = None) -> dict:
         if args.max_speed_kn > 0:
             tag += f"_vmax{args.max_speed_kn:g}kn"
             notes.append(f"speed ≤ {args.max_speed_kn:g} kn")
+        if args.truth_sigma_a > 0:
+            tag += f"_truthsa{args.truth_sigma_a:g}"
+            notes.append(f"truth σ_a = {args.truth_sigma_a:g} m/s²")
         pts = {}
         if PAPER[sc.name]:
             ts = [v[0] for v in PAPER[sc.name].values()]
@@ -215,7 +224,8 @@ def main(argv: list[str] | None = None) -> dict:
                          title=f"{sc.name} observer, {args.runs} runs, N = {args.particles}"
                          + ("" if tag == sc.name else " (" + ", ".join(notes) + ")"),
                          paper_points=pts)
-        plot_scenario_geometry(data.truth, data.observer_pos,
+        plot_scenario_geometry(data.truth if data.truth.ndim == 2 else data.truth[0],
+                               data.observer_pos,
                                str(d / f"spl_tma_geometry_{sc.name}.png"),
                                title=f"{sc.name} scenario")
     return out

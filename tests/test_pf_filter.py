@@ -65,6 +65,25 @@ def test_simulation_and_filter_are_seeded(table):
     assert 0.8 < err.std() < 2.2
 
 
+def test_truth_driven_by_process_noise(table):
+    """``truth_sigma_a``: one seeded track per run from the start state, velocity a random walk
+    of variance σ_a²·t per axis; measurements follow each run's own track."""
+    sc = get_scenario("static")
+    sa = 1.5e-3
+    d = sc.simulate(400, 2, table, truth_sigma_a=sa)
+    assert d.truth.shape == (400, sc.times.size, 4)
+    assert d.truth.tobytes() == sc.simulate(400, 2, table, truth_sigma_a=sa).truth.tobytes()
+    np.testing.assert_allclose(d.truth[:, 0], np.broadcast_to(sc.target_x0(), (400, 4)))
+    dv = d.truth[:, -1, 2:] - d.truth[:, 0, 2:]
+    var = sa**2 * (sc.times[-1] - sc.times[0]) * 60.0  # Σ (σ_a·Δt)² over the steps
+    assert 0.8 < dv.var(axis=0).mean() / var < 1.2
+    rel = d.truth[:, :, :2] - d.observer_pos
+    true = np.degrees(np.arctan2(rel[..., 0], rel[..., 1]))
+    err = (d.bearings_deg - true + 180) % 360 - 180
+    assert 1.3 < err.std() < 1.7
+    assert sc.simulate(2, 2, table).truth.shape == (sc.times.size, 4)  # default unchanged
+
+
 def _rmse(sc, est):
     return np.sqrt(np.mean(sc.position_error(est) ** 2, axis=0))
 

@@ -80,27 +80,44 @@ class SPLScenario:
         t = self.times if times is None else np.asarray(times, float)
         return self.observer.state(t)[0]
 
-    def simulate(self, n_runs: int, seed: int, tl: TLTable | None = None) -> ScenarioData:
+    def simulate(self, n_runs: int, seed: int, tl: TLTable | None = None,
+                 truth_sigma_a: float = 0.0) -> ScenarioData:
         """Bearings (eq. (8)) and levels (eq. (15)) for ``n_runs`` runs; run r draws from
-        ``numpy.random.default_rng([seed, r])``."""
+        ``numpy.random.default_rng([seed, r])``. With ``truth_sigma_a`` > 0 (m/s²) every run has
+        its own true track, driven by white accelerations of that standard deviation held over
+        each measurement interval (eqs. (4)-(6)); ``truth`` is then (R, K, 4)."""
         if n_runs < 1:
             raise ConfigError("scenario: n_runs must be >= 1")
         tl = tl or load_default_table()
         t = self.times
         obs = self.observer_pos(t)
-        x = self.truth(t)
-        d = x[:, :2] - obs
-        b_true = true_bearing(d[:, 0], d[:, 1])
-        h_l = received_level(x, obs, lambda r: tl(r, self.target_depth_m, self.observer_depth_m),
-                             self.source_level)
         sb = np.deg2rad(self.sigma_bearing_deg)
         bear = np.empty((n_runs, t.size))
         lev = np.empty((n_runs, t.size))
+        truth = self.truth(t)
+        runs_truth = np.empty((n_runs, t.size, 4)) if truth_sigma_a > 0 else None
+
+        def tl_fn(r):
+            return tl(r, self.target_depth_m, self.observer_depth_m)
+
+        x = truth
         for r in range(n_runs):
             rng = np.random.default_rng([seed, r])
+            if runs_truth is not None:
+                x = runs_truth[r]
+                x[0] = self.target_x0()
+                for k in range(1, t.size):
+                    dt = t[k] - t[k - 1]
+                    a = truth_sigma_a * rng.standard_normal(2)
+                    x[k, :2] = x[k - 1, :2] + dt * x[k - 1, 2:] + 0.5 * dt * dt * a
+                    x[k, 2:] = x[k - 1, 2:] + dt * a
+            if r == 0 or runs_truth is not None:
+                d = x[:, :2] - obs
+                b_true = true_bearing(d[:, 0], d[:, 1])
+                h_l = received_level(x, obs, tl_fn, self.source_level)
             bear[r] = np.rad2deg(np.mod(b_true + sb * rng.standard_normal(t.size), 2 * np.pi))
             lev[r] = h_l + self.sigma_level_data_db * rng.standard_normal(t.size)
-        return ScenarioData(t, obs, x, bear, lev)
+        return ScenarioData(t, obs, truth if runs_truth is None else runs_truth, bear, lev)
 
     def prior_covariance(self) -> np.ndarray:
         """Covariance of the filter's initial distribution (linearised, at the prior means),
@@ -118,9 +135,11 @@ class SPLScenario:
         return bearings_only_crlb(self.target_x0(), self.times, self.observer_pos(),
                                   np.deg2rad(self.sigma_bearing_deg), prior)
 
-    def position_error(self, est: np.ndarray) -> np.ndarray:
-        """Position error norm (…, K) m of estimates (…, K, 4)."""
-        return np.linalg.norm(est[..., :2] - self.truth()[..., :2], axis=-1)
+    def position_error(self, est: np.ndarray, truth: np.ndarray | None = None) -> np.ndarray:
+        """Position error norm (…, K) m of estimates (…, K, 4) against ``truth`` (K, 4) or
+        (R, K, 4) (default: the deterministic track)."""
+        truth = self.truth() if truth is None else truth
+        return np.linalg.norm(est[..., :2] - truth[..., :2], axis=-1)
 
 
 def _manoeuvring() -> SPLScenario:
