@@ -7,8 +7,7 @@ Stone Soup (benchmark-only dependency, ``pip install stonesoup``) runs its Parti
 ParticleUpdater with ESSResampler(threshold N/3, SystematicResampler) and its MCMCRegulariser
 (its regularisation step), a constant-velocity model with q = σ_a²·Δt (same velocity noise per
 step as ours), the Cartesian2DToBearing model with the observer position as translation offset,
-and the same prior distribution (range, bearing, speed; course uniform over the half circle
-about z0 + π) as ours. Bearings are converted from
+and the same prior draw (range, bearing, speed, course) as ours. Bearings are converted from
 true bearings (clockwise from north) to Stone Soup's atan2(y, x).
 
 Prints runs/s for both and the RMSE over the runs both filters saw.
@@ -63,8 +62,7 @@ def stonesoup_run(sc, times, obs, bearings_deg, n, seed):
     r = np.maximum(sc.range_prior_m[0] + sc.range_prior_m[1] * rng.standard_normal(n), 100.0)
     b = b0 + sig * rng.standard_normal(n)
     s = sc.speed_prior[0] + sc.speed_prior[1] * rng.standard_normal(n)
-    half = np.sqrt(3.0) * sc.course_std_rad  # uniform course, as RPFConfig's default
-    c = b0 + np.pi + half * rng.uniform(-1.0, 1.0, n)
+    c = b0 + np.pi + sc.course_std_rad * rng.standard_normal(n)
     sv = StateVectors([obs[0, 0] + r * np.sin(b), s * np.sin(c), obs[0, 1] + r * np.cos(b),
                        s * np.cos(c)])
     t0 = dt.datetime(2024, 1, 1)

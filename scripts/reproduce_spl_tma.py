@@ -90,9 +90,9 @@ def main(argv: list[str] | None = None) -> dict:
                     help="multiplier of the MISE-optimal bandwidth (paper: 1)")
     ap.add_argument("--sigma-a", type=float, default=None,
                     help="filter process noise, m/s^2 (paper: 1.5e-3)")
-    ap.add_argument("--course-prior", default="uniform", choices=["uniform", "normal"],
-                    help="prior course about z0 + pi with std pi/sqrt(12): uniform over a "
-                         "half circle (default) or normal")
+    ap.add_argument("--course-prior", default="normal", choices=["normal", "uniform"],
+                    help="prior course about z0 + pi with std pi/sqrt(12): normal (Ristic et "
+                         "al. 2003 ch. 6.4.1.1, default) or uniform over a half circle")
     ap.add_argument("--max-speed-kn", type=float, default=0.0,
                     help="zero weight for particles faster than this (not in the paper; "
                          "0: off)")
@@ -205,7 +205,7 @@ def main(argv: list[str] | None = None) -> dict:
         if args.bandwidth_scale != 1.0 or args.sigma_a is not None:
             tag += f"_h{args.bandwidth_scale:g}_sa{out['sigma_a']:g}"
             notes += [f"h × {args.bandwidth_scale:g}", f"σ_a = {out['sigma_a']:g} m/s²"]
-        if args.course_prior != "uniform":
+        if args.course_prior != "normal":
             tag += f"_course_{args.course_prior}"
             notes.append(f"{args.course_prior} course prior")
         if args.max_speed_kn > 0:

@@ -42,7 +42,7 @@ class RPFConfig:
     speed_std: float = 2 * KNOT
     course_offset_deg: float = 180.0         # prior course = first bearing + offset
     course_std_deg: float = float(np.rad2deg(np.pi / np.sqrt(12.0)))
-    course_prior: str = "uniform"            # or "normal"; π/√12 is the std of U(±π/2)
+    course_prior: str = "normal"             # Ristic ch. 6.4.1.1; "uniform": U(±√3·σ)
     min_range_m: float = 100.0
     max_speed_kn: float = 0.0                # > 0: zero weight above this speed (not in
     #                                          the paper; docs/validation.md, Tracking II)
