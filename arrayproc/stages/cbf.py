@@ -316,6 +316,8 @@ class CBF(Stage):
         n_parts = max(1, min(n_thr, s_n))
         edges = [round(i * s_n / n_parts) for i in range(n_parts + 1)]
         parts = [(i, edges[i], edges[i + 1]) for i in range(n_parts)]
+        for i, a, b in parts:  # plans are built here, not in the workers (FFTW planning is
+            self._part_plan(i, b - a, src[0].shape[1])  # not thread-safe)
         if n_parts == 1:
             old = set_local_threads(1)
             try:
