@@ -435,3 +435,35 @@ def test_output_independent_of_threads_and_batch(rng, threads):
             ref = y
         assert y.shape == ref.shape
         assert np.max(np.abs(y - ref)) < 1e-6 * np.max(np.abs(ref))
+
+
+def test_gap_in_the_stream_starts_a_new_frame_run_on_the_absolute_grid(rng):
+    """A jump in ``sample0`` (a gap in the recording) ends the pending frames; frames resume at
+    the next multiple of ``hop`` after the gap, none spans it, and each equals the reference."""
+    fs, n_h, nfft, hop = 2048.0, 8, 256, 96
+    pos = line_array(n_h, 0.5)
+    x = rng.standard_normal((4000, n_h)).astype(np.float32)
+    gap_at, gap = 1700, 333  # samples 1700.. of x are recorded at absolute 2033..
+
+    def blocks():
+        for a, b, s0 in ((0, 900, 0), (900, gap_at, 900), (gap_at, 3100, gap_at + gap),
+                         (3100, 4000, 3100 + gap)):
+            yield Block(x[a:b], ("time", "channel"), s0 / fs, (b - a) / fs, fs, pos, None,
+                        meta={"n_valid": b - a, "sample0": s0})
+
+    stage = CBF(nfft=nfft, hop=hop, window="hann", band=[100.0, 900.0], batch=5)
+    out = list(stage.process(blocks()))
+    y = np.concatenate([o.data for o in out])
+    starts = np.concatenate([o.meta["starts"] for o in out])
+    assert np.all(starts % hop == 0)
+    before = starts[starts < gap_at]
+    after = starts[starts >= gap_at + gap]
+    assert before.size + after.size == starts.size  # nothing starts inside the gap
+    assert before[-1] + nfft <= gap_at and after[0] == -(-(gap_at + gap) // hop) * hop
+    assert after[-1] + nfft <= 4000 + gap and after[-1] + hop + nfft > 4000 + gap
+    w = time_window("hann", nfft)
+    for s in range(starts.size):
+        a = starts[s] if starts[s] < gap_at else starts[s] - gap  # index into x
+        f, ref = beam_power_reference(x[a:a + nfft], fs, pos, stage.beam_axis, (100.0, 900.0),
+                                      C, w)
+        assert np.max(np.abs(y[s] - ref)) < 2e-5 * np.max(np.abs(ref))
