@@ -1,5 +1,10 @@
 """The one place FFTs are computed: pyfftw with cached plans, falling back to scipy.fft.
 
+Hot loops use :class:`BufferedPlan`, which times the back-ends it has on the planned shape and
+keeps the fastest: FFTW (pyfftw), ``ducc0.fft`` (optional extra ``fast``; SIMD across the
+transforms of a batch, the fastest here for the CBF's per-snapshot (2048, 64) transform) or
+``scipy.fft``.
+
 Both back-ends keep single precision for float32/complex64 input. Outputs are fresh arrays the
 caller owns. ``set_threads`` sets the FFTW thread count. The default is one thread: the
 stages already run their FFTs beside numba and BLAS threads, and on this project's 2-core
@@ -20,6 +25,13 @@ try:
     HAVE_PYFFTW = True
 except ImportError:  # pragma: no cover - pyfftw is a dependency, the fallback is for odd systems
     HAVE_PYFFTW = False
+
+try:
+    import ducc0.fft as _ducc
+
+    HAVE_DUCC = True
+except ImportError:  # optional extra ``fast``
+    HAVE_DUCC = False
 
 _threads = 1
 _plans: dict[tuple, object] = {}
@@ -92,41 +104,65 @@ class BufferedPlan:
     """A reusable transform over fixed-shape aligned buffers, for hot loops.
 
     Fill :attr:`input` (an aligned array of the planned shape and dtype) in place, then call
-    the plan: it returns the output (with FFTW a buffer the plan owns and overwrites on the
-    next call). Large transforms (>= 2**20 points) are planned with ``FFTW_MEASURE``, small
-    ones with ``FFTW_ESTIMATE``.
+    the plan: it returns the output (with FFTW and ducc0 a buffer the plan owns and overwrites
+    on the next call; with scipy a fresh array). Large FFTW transforms (>= 2**20 points) are
+    planned with ``FFTW_MEASURE``, small ones with ``FFTW_ESTIMATE``.
 
-    ``backend="auto"`` times the FFTW plan against ``scipy.fft`` (pocketfft, same threads) on
-    the planned shape when the plan is built and keeps the faster: on this project's machine
-    the pyfftw wheel's single-precision FFTW ran 2-3x slower than scipy.fft for the CBF's
-    batched 2048-point and the DFT filter's 8448-point transforms (docs/performance.md).
-    Results agree to float rounding either way.
+    ``backend="auto"`` times every back-end it has (FFTW, ducc0, scipy.fft; one thread each)
+    on the planned shape when the plan is built and keeps the fastest; ``"fftw"``, ``"ducc0"``
+    or ``"scipy"`` forces one. On this project's machine the pyfftw wheel's single-precision
+    FFTW ran 2-3x slower than scipy.fft for the CBF's and the DFT filter's transforms, and
+    ducc0 1.3-1.5x faster than scipy.fft for the CBF's per-snapshot (2048, 64) transform along
+    axis 0 (docs/performance.md). Results agree to float rounding whichever is used.
     """
+
+    KINDS = ("rfft", "irfft", "fft", "ifft")
 
     def __init__(self, kind: str, shape: tuple[int, ...], dtype: np.dtype | type,
                  axis: int = -1, backend: str = "auto") -> None:
-        self.kind, self.axis = kind, axis
+        if kind not in self.KINDS:
+            raise ValueError(f"unknown transform {kind!r}")
+        self.kind, self.axis = kind, axis % len(shape)
         dtype = np.dtype(dtype)
-        self._fftw = None
         self._workers = _threads
-        if HAVE_PYFFTW:
-            self.input = pyfftw.empty_aligned(shape, dtype)
-            self.input[...] = 0
-            if backend in ("auto", "fftw"):
-                effort = "FFTW_MEASURE" if self.input.size >= 1 << 20 else "FFTW_ESTIMATE"
-                self._fftw = getattr(_builders, kind)(
-                    self.input, axis=axis, threads=_threads, planner_effort=effort,
-                    overwrite_input=False, avoid_copy=True, auto_align_input=False,
-                    auto_contiguous=False)
-        else:  # pragma: no cover - fallback
-            self.input = np.zeros(shape, dtype)
-        if backend == "auto" and self._fftw is not None:
-            self.backend = "fftw" if self._time(self._fftw) <= self._time(self._scipy) \
-                else "scipy"
-            if self.backend == "scipy":
-                self._fftw = None
+        alloc = pyfftw.empty_aligned if HAVE_PYFFTW else np.empty
+        self.input = alloc(shape, dtype)
+        self.input[...] = 0
+        cands: dict[str, object] = {}
+        if HAVE_PYFFTW and backend in ("auto", "fftw"):
+            effort = "FFTW_MEASURE" if self.input.size >= 1 << 20 else "FFTW_ESTIMATE"
+            cands["fftw"] = getattr(_builders, kind)(
+                self.input, axis=axis, threads=_threads, planner_effort=effort,
+                overwrite_input=False, avoid_copy=True, auto_align_input=False,
+                auto_contiguous=False)
+        if HAVE_DUCC and backend in ("auto", "ducc0"):
+            cands["ducc0"] = self._ducc_runner()
+        if backend in ("auto", "scipy") or not cands:
+            cands["scipy"] = self._scipy
+        if len(cands) > 1:
+            self.backend = min(cands, key=lambda k: self._time(cands[k]))
         else:
-            self.backend = "fftw" if self._fftw is not None else "scipy"
+            self.backend = next(iter(cands))
+        self._run = cands[self.backend]
+
+    def _ducc_runner(self):
+        """ducc0 transform into an output buffer the plan owns (numpy's normalisation)."""
+        x, ax = self.input, (self.axis,)
+        n = x.shape[self.axis]
+        oshape = list(x.shape)
+        if self.kind == "rfft":
+            oshape[self.axis] = n // 2 + 1
+            out = np.empty(oshape, np.result_type(x.dtype, np.complex64))
+            return lambda: _ducc.r2c(x, axes=ax, forward=True, out=out)
+        if self.kind == "irfft":
+            m = 2 * (n - 1)
+            oshape[self.axis] = m
+            out = np.empty(oshape, np.float32 if x.dtype == np.complex64 else np.float64)
+            return lambda: _ducc.c2r(x, axes=ax, lastsize=m, forward=False, inorm=2, out=out)
+        out = np.empty(oshape, np.result_type(x.dtype, np.complex64))
+        if self.kind == "fft":
+            return lambda: _ducc.c2c(x, axes=ax, forward=True, out=out)
+        return lambda: _ducc.c2c(x, axes=ax, forward=False, inorm=2, out=out)
 
     @staticmethod
     def _time(f, reps: int = 3) -> float:
@@ -143,9 +179,7 @@ class BufferedPlan:
         return getattr(_sfft, self.kind)(self.input, axis=self.axis, workers=self._workers)
 
     def __call__(self) -> np.ndarray:
-        if self._fftw is None:
-            return self._scipy()
-        return self._fftw()
+        return self._run()
 
 
 _buffered: dict[tuple, BufferedPlan] = {}

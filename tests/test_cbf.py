@@ -207,7 +207,8 @@ def test_kernels_against_numpy(rng):
     spec = (rng.standard_normal((s_n, n_ch, 9)) + 1j * rng.standard_normal((s_n, n_ch, 9)))
     spec = spec.astype(np.complex64)
     x2 = np.empty((4, 2 * s_n, n_ch), np.float32)
-    kb.pack_bins(np.ascontiguousarray(spec.transpose(2, 0, 1)), 2, x2)  # (F, S, C) layout
+    for s in range(s_n):  # one snapshot's (F, C) spectrum at a time, into rows s and S + s
+        kb.pack_bins(np.ascontiguousarray(spec[s].T), 2, s, x2)
     assert np.array_equal(x2[:, :s_n], spec[:, :, 2:6].real.transpose(2, 0, 1))
     assert np.array_equal(x2[:, s_n:], spec[:, :, 2:6].imag.transpose(2, 0, 1))
     freqs = np.array([10.0, 20.0, 35.0, 40.0])
@@ -334,7 +335,8 @@ def test_fold_kernels_against_numpy(rng):
     pj = np.array([4, 3, 2], np.int64)  # element 2 is the centre
     xs = np.empty((nf, 2 * s_n, 3), np.float32)
     xd = np.empty((nf, 2 * s_n, 3), np.float32)
-    kb.pack_fold(np.ascontiguousarray(spec.transpose(2, 0, 1)), 1, pi, pj, xs, xd)
+    for s in range(s_n):
+        kb.pack_fold(np.ascontiguousarray(spec[s].T), 1, pi, pj, s, xs, xd)
     x = spec[:, :, 1:5].transpose(2, 0, 1)  # (nf, S, C)
     ssum = x[:, :, pi] + np.where(pi == pj, 0, 1) * x[:, :, pj]
     sdif = np.where(pi == pj, 0, 1) * (x[:, :, pi] - x[:, :, pj])
@@ -406,18 +408,16 @@ name = "btr_{k}"
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.integers(1, 6), st.integers(1, 9), st.integers(8, 200), st.integers(0, 2**31 - 1))
-def test_window_frames_against_numpy(n_frames, n_ch, n, seed):
-    """kernels.beamform.window_frames: frames gathered from the time-major buffer and
-    windowed into the (N, S, C) FFT input, equal to numpy fancy indexing."""
+@given(st.integers(1, 9), st.integers(8, 200), st.integers(0, 60), st.integers(0, 2**31 - 1))
+def test_window_frame_against_numpy(n_ch, n, offset, seed):
+    """kernels.beamform.window_frame: one frame of the time-major buffer windowed into the
+    (N, C) FFT input, equal to numpy slicing times the window."""
     g = np.random.default_rng(seed)
-    x = g.standard_normal((n + 3 * n_frames + 5, n_ch)).astype(np.float32)
-    offs = np.sort(g.integers(0, x.shape[0] - n + 1, n_frames)).astype(np.int64)
+    x = g.standard_normal((n + offset + 5, n_ch)).astype(np.float32)
     w = g.standard_normal(n).astype(np.float32)
-    out = np.empty((n, n_frames, n_ch), np.float32)
-    kb.window_frames(x, offs, w, out)
-    ref = (x[offs[:, None] + np.arange(n)[None, :]] * w[None, :, None]).transpose(1, 0, 2)
-    np.testing.assert_array_equal(out, ref)
+    out = np.empty((n, n_ch), np.float32)
+    kb.window_frame(x, offset, w, out)
+    np.testing.assert_array_equal(out, x[offset:offset + n] * w[:, None])
 
 
 @pytest.mark.parametrize("threads", [1, 2, 3])

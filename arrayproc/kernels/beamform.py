@@ -23,36 +23,38 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, uint64
 
 
 @njit(cache=True, nogil=True)
-def window_frames(x: np.ndarray, offsets: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
-    """``out[t, s, c] = w[t] · x[offsets[s] + t, c]``: frames of the time-major stream buffer
-    ``x`` (T, C) windowed into the time-major FFT input ``out`` (N, S, C); the FFT then runs
-    along the first axis and leaves each bin's (S, C) plane contiguous for the packing."""
-    n, ns, nc = out.shape
-    for t in range(n):
+def window_frame(x: np.ndarray, offset: int, w: np.ndarray, out: np.ndarray) -> None:
+    """``out[t, c] = w[t] · x[offset + t, c]``: one frame of the time-major stream buffer ``x``
+    (T, C) windowed into the (N, C) FFT input (transformed along its first axis)."""
+    n, nc = out.shape
+    o = uint64(offset)  # unsigned: no negative-index wraparound in the loop
+    for t in range(uint64(n)):
         wt = w[t]
-        for s in range(ns):
-            o = offsets[s] + t
-            for c in range(nc):
-                out[t, s, c] = wt * x[o, c]
+        row = x[o + t]
+        orow = out[t]
+        for c in range(nc):
+            orow[c] = wt * row[c]
 
 
 @njit(cache=True, nogil=True)
-def pack_bins(spec: np.ndarray, first_bin: int, out: np.ndarray) -> None:
-    """Copy bins ``first_bin .. first_bin + out.shape[0]`` of ``spec`` (F, S, C) complex into
-    ``out`` (nf, 2S, C) float32: rows 0..S-1 the real parts, rows S..2S-1 the imaginary."""
+def pack_bins(spec: np.ndarray, first_bin: int, s: int, out: np.ndarray) -> None:
+    """Bins ``first_bin .. first_bin + out.shape[0]`` of one snapshot's spectrum ``spec``
+    (F, C) complex into rows ``s`` (real parts) and ``S + s`` (imaginary parts) of ``out``
+    (nf, 2S, C) float32, the stacked GEMM operand ``[Xr; Xi]`` of every bin."""
     nf, s2, nc = out.shape
     ns = s2 // 2
     for f in range(nf):
-        for s in range(ns):
-            row = spec[first_bin + f, s]
-            for c in range(nc):
-                v = row[c]
-                out[f, s, c] = v.real
-                out[f, ns + s, c] = v.imag
+        row = spec[first_bin + f]
+        o_r = out[f, s]
+        o_i = out[f, ns + s]
+        for c in range(nc):
+            v = row[c]
+            o_r[c] = v.real
+            o_i[c] = v.imag
 
 
 @njit(cache=True, nogil=True)
@@ -141,29 +143,32 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
+def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray, s: int,
               out_s: np.ndarray, out_d: np.ndarray) -> None:
-    """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of
-    ``spec`` (F, S, C): ``out_s``/``out_d`` (nf, 2S, K), real parts in rows 0..S-1, imaginary
-    in rows S..2S-1. A centre element (pi == pj) gives S = X, D = 0."""
+    """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of one
+    snapshot's spectrum ``spec`` (F, C), into rows ``s`` (real parts) and ``S + s`` (imaginary
+    parts) of ``out_s``/``out_d`` (nf, 2S, K). A centre element (pi == pj) gives S = X, D = 0."""
     nf, s2, nk = out_s.shape
     ns = s2 // 2
     for f in range(nf):
-        for s in range(ns):
-            row = spec[first_bin + f, s]
-            for k in range(nk):
-                a = row[pi[k]]
-                if pj[k] != pi[k]:
-                    b = row[pj[k]]
-                    out_s[f, s, k] = a.real + b.real
-                    out_s[f, ns + s, k] = a.imag + b.imag
-                    out_d[f, s, k] = a.real - b.real
-                    out_d[f, ns + s, k] = a.imag - b.imag
-                else:
-                    out_s[f, s, k] = a.real
-                    out_s[f, ns + s, k] = a.imag
-                    out_d[f, s, k] = 0.0
-                    out_d[f, ns + s, k] = 0.0
+        row = spec[first_bin + f]
+        sr = out_s[f, s]
+        si = out_s[f, ns + s]
+        dr = out_d[f, s]
+        di = out_d[f, ns + s]
+        for k in range(nk):
+            a = row[pi[k]]
+            if pj[k] != pi[k]:
+                b = row[pj[k]]
+                sr[k] = a.real + b.real
+                si[k] = a.imag + b.imag
+                dr[k] = a.real - b.real
+                di[k] = a.imag - b.imag
+            else:
+                sr[k] = a.real
+                si[k] = a.imag
+                dr[k] = 0.0
+                di[k] = 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -207,28 +212,33 @@ def unpack_fold(za: np.ndarray, zb: np.ndarray, runs: np.ndarray, y: np.ndarray,
                 f_off: int) -> None:
     """Beams from the folded GEMMs ``za`` = [Sr; Si]·C and ``zb`` = [Dr; Di]·S, (nf, 2S, U):
     Y(+u) = A − jB = (Ar + Bi) + j(Ai − Br), Y(−u) = A + jB, into y (S, F, B) complex64;
-    ``runs`` from :func:`beam_runs`."""
+    ``runs`` from :func:`beam_runs`. Each beam is written once, straight from the GEMM rows."""
     nf = za.shape[0]
     ns = za.shape[1] // 2
-    nu = za.shape[2]
-    tp = np.empty(nu, np.complex64)  # Y(+u) of one (snapshot, bin), then Y(−u)
-    tm = np.empty(nu, np.complex64)
     for s in range(ns):  # s outer: y[s, f_off:f_off+nf, :] is one contiguous run of memory
         for f in range(nf):
             ar = za[f, s]
             ai = za[f, ns + s]
             br = zb[f, s]
             bi = zb[f, ns + s]
-            for u in range(nu):  # contiguous, vectorisable
-                tp[u] = complex(ar[u] + bi[u], ai[u] - br[u])
-                tm[u] = complex(ar[u] - bi[u], ai[u] + br[u])
             out = y[s, f_off + f]
             for r in range(runs.shape[0]):
-                b0, n, u0, du = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
-                src = tp if runs[r, 4] > 0 else tm
-                if du == 1:
+                # unsigned indices: numba then emits no negative-index wraparound, and with
+                # constant unit strides the loops vectorise (2-3x faster, docs/performance.md)
+                b0, n, u0 = uint64(runs[r, 0]), uint64(runs[r, 1]), uint64(runs[r, 2])
+                fwd = runs[r, 3] == 1
+                if runs[r, 4] > 0:
+                    if fwd:
+                        for m in range(n):
+                            out[b0 + m] = complex(ar[u0 + m] + bi[u0 + m],
+                                                  ai[u0 + m] - br[u0 + m])
+                    else:
+                        for m in range(n):
+                            out[b0 + m] = complex(ar[u0 - m] + bi[u0 - m],
+                                                  ai[u0 - m] - br[u0 - m])
+                elif fwd:
                     for m in range(n):
-                        out[b0 + m] = src[u0 + m]
+                        out[b0 + m] = complex(ar[u0 + m] - bi[u0 + m], ai[u0 + m] + br[u0 + m])
                 else:
                     for m in range(n):
-                        out[b0 + m] = src[u0 - m]
+                        out[b0 + m] = complex(ar[u0 - m] - bi[u0 - m], ai[u0 - m] + br[u0 - m])
