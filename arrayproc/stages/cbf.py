@@ -297,22 +297,39 @@ class CBF(Stage):
             plans[key] = fft.BufferedPlan(kind, (self.nfft, n_ch), self._dtype(), axis=0)
         return plans[key]
 
-    def _part_buffers(self, part: int, ns: int, n_ch: int) -> tuple[np.ndarray, ...]:
-        """The GEMM operands of worker ``part`` for ``ns`` snapshots, every bin of the band:
-        (F, 2ns, K) pair sums and differences (folded path) or (F, 2ns, C) spectra."""
+    def _operands(self, s_n: int, n_ch: int) -> tuple[np.ndarray, ...]:
+        """The GEMM operands of a batch of ``s_n`` snapshots, every bin of the band: (F, 2S, K)
+        pair sums and differences (folded path) or (F, 2S, C) spectra, real parts in rows
+        0..S-1 and imaginary parts in rows S..2S-1. Views of arrays sized for a whole batch,
+        allocated once per stream: a fresh array costs page faults (docs/performance.md)."""
         nf = self._bins.size
-        key = (part, ns, n_ch, nf, self._pairs is not None)
+        cap = max(self.batch, s_n)
+        folded = self._pairs is not None
+        width = self._pairs[0].size if folded else n_ch
+        key = ("ops", cap, width, nf, folded)
         bufs = self.__dict__.setdefault("_bufs", {})
         if key not in bufs:
             if len(bufs) > 8:
                 bufs.clear()
-            if self._pairs is not None:
-                k = self._pairs[0].size
-                bufs[key] = (np.empty((nf, 2 * ns, k), np.float32),
-                             np.empty((nf, 2 * ns, k), np.float32))
-            else:
-                bufs[key] = (np.empty((nf, 2 * ns, n_ch), np.float32),)
-        return bufs[key]
+            bufs[key] = tuple(np.empty((nf, 2 * cap, width), np.float32)
+                              for _ in range(2 if folded else 1))
+        return tuple(v[:, :2 * s_n] for v in bufs[key])
+
+    def _results(self, part: int, s_n: int) -> tuple[np.ndarray, ...]:
+        """Worker ``part``'s GEMM results for one chunk of bins: (chunk, 2S, U) twice (folded
+        path) or (chunk, 2S, 2U); views of arrays sized for a whole batch."""
+        cap = max(self.batch, s_n)
+        nu = int(self._uidx.max()) + 1
+        chunk = min(self._bins.size, BINS_PER_TASK)
+        folded = self._pairs is not None
+        key = ("res", part, cap, nu, chunk, folded)
+        bufs = self.__dict__.setdefault("_bufs", {})
+        if key not in bufs:
+            if len(bufs) > 8:
+                bufs.clear()
+            shapes = [(chunk, 2 * cap, nu)] * 2 if folded else [(chunk, 2 * cap, 2 * nu)]
+            bufs[key] = tuple(np.empty(sh, np.float32) for sh in shapes)
+        return tuple(v[:, :2 * s_n] for v in bufs[key])
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
         """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`)."""
@@ -327,77 +344,89 @@ class CBF(Stage):
 
     def _beamform_frames(self, s_n: int, src: tuple) -> np.ndarray:
         """Beams (S, F, B) of the ``s_n`` frames starting at ``src[1]`` in the time-major buffer
-        ``src[0]`` (T, C). The snapshots are split into one contiguous part per worker thread,
-        and each worker runs the whole path on its part (windowing, FFT, then pack → GEMM →
-        unpack per chunk of bins): no serial step inside a batch."""
+        ``src[0]`` (T, C), in two parallel phases on the worker threads. First each frame is
+        windowed, transformed and packed into the batch's GEMM operands (:meth:`_front`), then
+        each chunk of bins gets its GEMMs and its unpack, over all snapshots (:meth:`_back`).
+        The workers take frames, then chunks, from a shared queue (an iterator: its ``next``
+        is atomic), so a worker slowed down by the machine does not hold the batch up, and
+        the chunks of the steering matrix (17.7 MB for the issue-4 configuration) are read
+        once per batch, not once per worker."""
         n_thr = self.threads or (os.cpu_count() or 1)
-        y = self._out_buffer((s_n, self._bins.size, self._uidx.size))
+        nf, n_ch = self._bins.size, src[0].shape[1]
+        y = self._out_buffer((s_n, nf, self._uidx.size))
+        ops = self._operands(s_n, n_ch)
+        chunk = min(nf, BINS_PER_TASK)
         n_parts = max(1, min(n_thr, s_n))
-        edges = [round(i * s_n / n_parts) for i in range(n_parts + 1)]
-        parts = [(i, edges[i], edges[i + 1]) for i in range(n_parts)]
-        for i, a, b in parts:  # plans and buffers are made here, not in the workers (FFTW
-            self._part_plan(i, src[0].shape[1])  # planning is not thread-safe)
-            self._part_buffers(i, b - a, src[0].shape[1])
+        for i in range(n_parts):  # plans and buffers are made here, not in the workers (FFTW
+            self._part_plan(i, n_ch)  # planning is not thread-safe)
+            self._results(i, s_n)
+        frames, chunks = iter(range(s_n)), iter(range(0, nf, chunk))
         if n_parts == 1:
             old = set_local_threads(1)
             try:
-                self._beamform_part(0, 0, s_n, y, src)
+                self._front(0, frames, ops, src)
+                self._back(0, chunks, ops, y)
             finally:
                 if old is not None:
                     set_local_threads(old)
         else:
-            list(_pool(n_parts).map(lambda p: self._beamform_part(*p, y, src), parts))
+            pool = _pool(n_parts)
+            list(pool.map(lambda i: self._front(i, frames, ops, src), range(n_parts)))
+            list(pool.map(lambda i: self._back(i, chunks, ops, y), range(n_parts)))
         return y
 
-    def _beamform_part(self, part: int, a: int, b: int, y: np.ndarray, src: tuple) -> None:
-        """Snapshots ``a:b`` of the batch into ``y[a:b]`` (worker ``part``): each frame is
-        windowed, transformed and packed into the band's GEMM operands while its spectrum is
-        in cache, then one GEMM per bin (in chunks of bins) and the unpack into beams."""
+    def _front(self, part: int, frames: Iterator[int], ops: tuple, src: tuple) -> None:
+        """Frames taken from ``frames``, one at a time while it is in cache: window, FFT, and
+        pack its band into rows ``s`` and ``S + s`` of the GEMM operands (worker ``part``)."""
         x, offsets = src
-        ns = b - a
         plan = self._part_plan(part, x.shape[1])
-        bufs = self._part_buffers(part, ns, x.shape[1])
         win = self._win_cast()
         first = int(self._bins[0])
         pairs = self._pairs
-        for s in range(ns):
-            kb.window_frame(x, int(offsets[a + s]), win, plan.input)
+        for s in frames:
+            kb.window_frame(x, int(offsets[s]), win, plan.input)
             spec = plan()  # (F_all, C)
             f0 = first
             if not self._contig:
                 spec, f0 = spec[self._bins], 0
             if pairs is not None:
-                kb.pack_fold(spec, f0, pairs[0], pairs[1], s, bufs[0], bufs[1])
+                kb.pack_fold(spec, f0, pairs[0], pairs[1], s, ops[0], ops[1])
             else:
-                kb.pack_bins(spec, f0, s, bufs[0])
-        nf = self._bins.size
-        yv = y[a:b]
-        chunk = min(nf, BINS_PER_TASK)
-        for c in range(0, nf, chunk):
+                kb.pack_bins(spec, f0, s, ops[0])
+
+    def _back(self, part: int, chunks: Iterator[int], ops: tuple, y: np.ndarray) -> None:
+        """Chunks of bins taken from ``chunks`` (first bin of each), for every snapshot: one
+        real GEMM per bin and the unpack of its results into the beams (worker ``part``)."""
+        z = self._results(part, y.shape[0])
+        chunk, nf = z[0].shape[0], y.shape[1]
+        for c in chunks:
             e = min(nf, c + chunk)
-            if pairs is not None:
-                za = np.matmul(bufs[0][c:e], self._steer[0][c:e])
-                zb = np.matmul(bufs[1][c:e], self._steer[1][c:e])
-                kb.unpack_fold(za, zb, self._runs, yv, c)
+            if self._pairs is not None:
+                za = np.matmul(ops[0][c:e], self._steer[0][c:e], out=z[0][:e - c])
+                zb = np.matmul(ops[1][c:e], self._steer[1][c:e], out=z[1][:e - c])
+                kb.unpack_fold(za, zb, self._runs, y, c)
             else:
-                z = np.matmul(bufs[0][c:e], self._steer[c:e])
-                kb.unpack_beams(z, self._uidx, self._sign, yv, c)
+                zz = np.matmul(ops[0][c:e], self._steer[c:e], out=z[0][:e - c])
+                kb.unpack_beams(zz, self._uidx, self._sign, y, c)
 
     def _out_buffer(self, shape: tuple[int, ...]) -> np.ndarray:
-        """An output array: a previously emitted one that nobody references any more (blocks
-        and views keep their base alive, so the reference count says it is free), else a new
-        one. Saves the page faults of a fresh 35 MB array per batch (about 0.2-0.4 ms per
-        snapshot measured here)."""
+        """An output array of ``shape`` (S, F, B): the first S snapshots of a full-batch
+        array that was emitted before and that nobody references any more (blocks and views
+        keep their base alive, so the reference count says it is free), else of a new one.
+        Every array holds a whole batch, so a short batch (the end of a stream, a gap) reuses
+        one too: a fresh 35 MB array costs 8-100 ms of page faults here (docs/performance.md),
+        up to 0.6 ms per snapshot of a 30 s run."""
+        full = (max(self.batch, shape[0]),) + tuple(shape[1:])
         pool = self.__dict__.setdefault("_pool", [])
         for buf in pool:
             # references: the pool list, the loop variable and getrefcount's argument
-            if buf.shape == shape and sys.getrefcount(buf) <= 3:
-                return buf
-        buf = np.empty(shape, np.complex64)
+            if buf.shape == full and sys.getrefcount(buf) <= 3:
+                return buf[:shape[0]]
+        buf = np.empty(full, np.complex64)
         if len(pool) >= 3:
             pool.pop(0)
         pool.append(buf)
-        return buf
+        return buf[:shape[0]]
 
     def _headings(self, times: np.ndarray, fallback: float) -> np.ndarray:
         rec = self.ctx.recording
