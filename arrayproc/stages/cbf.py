@@ -71,6 +71,17 @@ def _pool(n: int) -> ThreadPoolExecutor:
     return _pools[n]
 
 
+def _aligned(shape: tuple[int, ...], align: int = 64) -> np.ndarray:
+    """An uninitialised float32 array whose data starts on an ``align``-byte (cache-line)
+    boundary. The workers write different rows of the same GEMM operand arrays: with rows a
+    multiple of 64 bytes long (K = 32 floats), aligned rows never share a cache line, so the
+    two cores do not fight over lines (false sharing doubled the packing time here)."""
+    n = int(np.prod(shape))
+    raw = np.empty(n + align // 4, np.float32)
+    off = (-raw.ctypes.data % align) // 4
+    return raw[off:off + n].reshape(shape)
+
+
 def time_window(name: str, nfft: int) -> np.ndarray:
     """Periodic time taper of length ``nfft`` normalised to mean 1 (coherent gain 1)."""
     if name == "none":
@@ -311,8 +322,7 @@ class CBF(Stage):
         if key not in bufs:
             if len(bufs) > 8:
                 bufs.clear()
-            bufs[key] = tuple(np.empty((nf, 2 * cap, width), np.float32)
-                              for _ in range(2 if folded else 1))
+            bufs[key] = tuple(_aligned((nf, 2 * cap, width)) for _ in range(2 if folded else 1))
         return tuple(v[:, :2 * s_n] for v in bufs[key])
 
     def _results(self, part: int, s_n: int) -> tuple[np.ndarray, ...]:
