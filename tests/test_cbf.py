@@ -206,9 +206,14 @@ def test_kernels_against_numpy(rng):
     s_n, n_ch, nb = 3, 5, 7
     spec = (rng.standard_normal((s_n, n_ch, 9)) + 1j * rng.standard_normal((s_n, n_ch, 9)))
     spec = spec.astype(np.complex64)
-    x2 = np.empty((4, 2 * s_n, n_ch), np.float32)
-    for s in range(s_n):  # one snapshot's (F, C) spectrum at a time, into rows s and S + s
-        kb.pack_bins(np.ascontiguousarray(spec[s].T), 2, s, x2)
+    q = np.empty((s_n, 2, 4, n_ch), np.float32)
+    for s in range(s_n):  # one snapshot's (F, C) spectrum at a time, split re/im
+        kb.pack_bins(np.ascontiguousarray(spec[s].T), 2, q[s])
+    assert np.array_equal(q[:, 0], spec[:, :, 2:6].real.transpose(0, 2, 1))
+    assert np.array_equal(q[:, 1], spec[:, :, 2:6].imag.transpose(0, 2, 1))
+    x2 = np.empty((4, 2 * s_n, n_ch), np.float32)  # corner turn into per-bin operands
+    kb.gather_bins(q, 0, x2[:2])
+    kb.gather_bins(q, 2, x2[2:])
     assert np.array_equal(x2[:, :s_n], spec[:, :, 2:6].real.transpose(2, 0, 1))
     assert np.array_equal(x2[:, s_n:], spec[:, :, 2:6].imag.transpose(2, 0, 1))
     freqs = np.array([10.0, 20.0, 35.0, 40.0])
@@ -333,10 +338,14 @@ def test_fold_kernels_against_numpy(rng):
     spec = spec.astype(np.complex64)
     pi = np.array([0, 1, 2], np.int64)
     pj = np.array([4, 3, 2], np.int64)  # element 2 is the centre
+    qs = np.empty((s_n, 2, nf, 3), np.float32)
+    qd = np.empty((s_n, 2, nf, 3), np.float32)
+    for s in range(s_n):
+        kb.pack_fold(np.ascontiguousarray(spec[s].T), 1, pi, pj, qs[s], qd[s])
     xs = np.empty((nf, 2 * s_n, 3), np.float32)
     xd = np.empty((nf, 2 * s_n, 3), np.float32)
-    for s in range(s_n):
-        kb.pack_fold(np.ascontiguousarray(spec[s].T), 1, pi, pj, s, xs, xd)
+    kb.gather_bins(qs, 0, xs)
+    kb.gather_bins(qd, 0, xd)
     x = spec[:, :, 1:5].transpose(2, 0, 1)  # (nf, S, C)
     ssum = x[:, :, pi] + np.where(pi == pj, 0, 1) * x[:, :, pj]
     sdif = np.where(pi == pj, 0, 1) * (x[:, :, pi] - x[:, :, pj])
@@ -405,6 +414,22 @@ name = "btr_{k}"
         n = (p.shape[0] // 8) * 8
         want = 10 * np.log10(p[:n].reshape(-1, 8, *p.shape[1:]).sum(1).sum(1) / 1e-12)
         assert np.allclose(g[f"btr_{k}"]["power_db"], want, atol=1e-3)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 7), st.integers(1, 6), st.integers(1, 9), st.integers(0, 2**31 - 1))
+def test_gather_bins_is_the_corner_turn(n_snap, nf, width, seed):
+    """kernels.beamform.gather_bins: (S, 2, F, W) per-snapshot pieces → (n, 2S, W) per-bin
+    operands, real parts in rows 0..S-1 and imaginary parts in rows S..2S-1, for any bin
+    range, equal to a numpy transpose."""
+    g = np.random.default_rng(seed)
+    q = g.standard_normal((n_snap, 2, nf, width)).astype(np.float32)
+    f0 = int(g.integers(0, nf))
+    n = int(g.integers(1, nf - f0 + 1))
+    out = np.full((n, 2 * n_snap, width), np.nan, np.float32)
+    kb.gather_bins(q, f0, out)
+    want = q[:, :, f0:f0 + n].transpose(2, 1, 0, 3).reshape(n, 2 * n_snap, width)
+    np.testing.assert_array_equal(out, want)
 
 
 @settings(max_examples=25, deadline=None)

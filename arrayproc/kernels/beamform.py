@@ -41,20 +41,39 @@ def window_frame(x: np.ndarray, offset: int, w: np.ndarray, out: np.ndarray) -> 
 
 
 @njit(cache=True, nogil=True)
-def pack_bins(spec: np.ndarray, first_bin: int, s: int, out: np.ndarray) -> None:
-    """Bins ``first_bin .. first_bin + out.shape[0]`` of one snapshot's spectrum ``spec``
-    (F, C) complex into rows ``s`` (real parts) and ``S + s`` (imaginary parts) of ``out``
-    (nf, 2S, C) float32, the stacked GEMM operand ``[Xr; Xi]`` of every bin."""
-    nf, s2, nc = out.shape
-    ns = s2 // 2
-    for f in range(nf):
-        row = spec[first_bin + f]
-        o_r = out[f, s]
-        o_i = out[f, ns + s]
+def pack_bins(spec: np.ndarray, first_bin: int, out: np.ndarray) -> None:
+    """Bins ``first_bin .. first_bin + nf`` of one snapshot's spectrum ``spec`` (F, C)
+    complex, split into ``out`` (2, nf, C) float32: real parts in ``out[0]``, imaginary parts
+    in ``out[1]``. One snapshot's output is contiguous, so the writes stream (the corner turn
+    to per-bin order is :func:`gather_bins`, from cache-sized pieces)."""
+    nf, nc = out.shape[1], out.shape[2]
+    for f in range(uint64(nf)):
+        row = spec[uint64(first_bin) + f]
+        o_r = out[0, f]
+        o_i = out[1, f]
         for c in range(nc):
             v = row[c]
             o_r[c] = v.real
             o_i[c] = v.imag
+
+
+@njit(cache=True, nogil=True)
+def gather_bins(q: np.ndarray, first_bin: int, out: np.ndarray) -> None:
+    """The corner turn: bins ``first_bin .. first_bin + n`` of the per-snapshot arrays ``q``
+    (S, 2, nf, W) into the per-bin GEMM operands ``out`` (n, 2S, W): row s holds snapshot s's
+    ``q[s, 0]`` (real parts), row S + s its ``q[s, 1]`` (imaginary parts). Each source piece
+    is n·W contiguous floats and the destination fits in cache."""
+    ns = q.shape[0]
+    n, nw = out.shape[0], out.shape[2]
+    f0 = uint64(first_bin)
+    for s in range(uint64(ns)):
+        for p in range(uint64(2)):
+            r = p * uint64(ns) + s
+            for f in range(uint64(n)):
+                src = q[s, p, f0 + f]
+                dst = out[f, r]
+                for k in range(uint64(nw)):
+                    dst[k] = src[k]
 
 
 @njit(cache=True, nogil=True)
@@ -143,23 +162,24 @@ def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray, s: int,
+def pack_fold(spec: np.ndarray, first_bin: int, pi: np.ndarray, pj: np.ndarray,
               out_s: np.ndarray, out_d: np.ndarray) -> None:
-    """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin ..`` of one
-    snapshot's spectrum ``spec`` (F, C), into rows ``s`` (real parts) and ``S + s`` (imaginary
-    parts) of ``out_s``/``out_d`` (nf, 2S, K). A centre element (pi == pj) gives S = X, D = 0."""
-    nf, s2, nk = out_s.shape
-    ns = s2 // 2
-    for f in range(nf):
-        row = spec[first_bin + f]
-        sr = out_s[f, s]
-        si = out_s[f, ns + s]
-        dr = out_d[f, s]
-        di = out_d[f, ns + s]
-        for k in range(nk):
-            a = row[pi[k]]
-            if pj[k] != pi[k]:
-                b = row[pj[k]]
+    """Sums and differences of element pairs (pi[k], pj[k]) for bins ``first_bin .. +nf`` of
+    one snapshot's spectrum ``spec`` (F, C), into ``out_s``/``out_d`` (2, nf, K): real parts
+    in ``[0]``, imaginary parts in ``[1]``. A centre element (pi == pj) gives S = X, D = 0."""
+    nf, nk = out_s.shape[1], out_s.shape[2]
+    for f in range(uint64(nf)):
+        row = spec[uint64(first_bin) + f]
+        sr = out_s[0, f]
+        si = out_s[1, f]
+        dr = out_d[0, f]
+        di = out_d[1, f]
+        for k in range(uint64(nk)):
+            i = uint64(pi[k])
+            j = uint64(pj[k])
+            a = row[i]
+            if j != i:
+                b = row[j]
                 sr[k] = a.real + b.real
                 si[k] = a.imag + b.imag
                 dr[k] = a.real - b.real

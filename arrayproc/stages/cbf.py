@@ -309,10 +309,10 @@ class CBF(Stage):
         return plans[key]
 
     def _operands(self, s_n: int, n_ch: int) -> tuple[np.ndarray, ...]:
-        """The GEMM operands of a batch of ``s_n`` snapshots, every bin of the band: (F, 2S, K)
-        pair sums and differences (folded path) or (F, 2S, C) spectra, real parts in rows
-        0..S-1 and imaginary parts in rows S..2S-1. Views of arrays sized for a whole batch,
-        allocated once per stream: a fresh array costs page faults (docs/performance.md)."""
+        """A batch's packed spectra, one contiguous piece per snapshot: (S, 2, F, K) pair sums
+        and differences (folded path) or (S, 2, F, C) spectra, real parts in ``[:, 0]`` and
+        imaginary parts in ``[:, 1]``. Views of arrays sized for a whole batch, allocated once
+        per stream: a fresh array costs page faults (docs/performance.md)."""
         nf = self._bins.size
         cap = max(self.batch, s_n)
         folded = self._pairs is not None
@@ -322,23 +322,28 @@ class CBF(Stage):
         if key not in bufs:
             if len(bufs) > 8:
                 bufs.clear()
-            bufs[key] = tuple(_aligned((nf, 2 * cap, width)) for _ in range(2 if folded else 1))
-        return tuple(v[:, :2 * s_n] for v in bufs[key])
+            bufs[key] = tuple(_aligned((cap, 2, nf, width)) for _ in range(2 if folded else 1))
+        return tuple(v[:s_n] for v in bufs[key])
 
-    def _results(self, part: int, s_n: int) -> tuple[np.ndarray, ...]:
-        """Worker ``part``'s GEMM results for one chunk of bins: (chunk, 2S, U) twice (folded
-        path) or (chunk, 2S, 2U); views of arrays sized for a whole batch."""
+    def _results(self, part: int, s_n: int, n_ch: int) -> tuple[np.ndarray, ...]:
+        """Worker ``part``'s arrays for one chunk of bins: the GEMM operands (chunk, 2S, K)
+        twice (folded path) or (chunk, 2S, C), then the GEMM results (chunk, 2S, U) twice or
+        (chunk, 2S, 2U); views of arrays sized for a whole batch."""
         cap = max(self.batch, s_n)
         nu = int(self._uidx.max()) + 1
         chunk = min(self._bins.size, BINS_PER_TASK)
         folded = self._pairs is not None
-        key = ("res", part, cap, nu, chunk, folded)
+        width = self._pairs[0].size if folded else n_ch
+        key = ("res", part, cap, nu, chunk, width, folded)
         bufs = self.__dict__.setdefault("_bufs", {})
         if key not in bufs:
             if len(bufs) > 8:
                 bufs.clear()
-            shapes = [(chunk, 2 * cap, nu)] * 2 if folded else [(chunk, 2 * cap, 2 * nu)]
-            bufs[key] = tuple(np.empty(sh, np.float32) for sh in shapes)
+            if folded:
+                shapes = [(chunk, 2 * cap, width)] * 2 + [(chunk, 2 * cap, nu)] * 2
+            else:
+                shapes = [(chunk, 2 * cap, width), (chunk, 2 * cap, 2 * nu)]
+            bufs[key] = tuple(_aligned(sh) for sh in shapes)
         return tuple(v[:, :2 * s_n] for v in bufs[key])
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
@@ -369,7 +374,7 @@ class CBF(Stage):
         n_parts = max(1, min(n_thr, s_n))
         for i in range(n_parts):  # plans and buffers are made here, not in the workers (FFTW
             self._part_plan(i, n_ch)  # planning is not thread-safe)
-            self._results(i, s_n)
+            self._results(i, s_n, n_ch)
         frames, chunks = iter(range(s_n)), iter(range(0, nf, chunk))
         if n_parts == 1:
             old = set_local_threads(1)
@@ -387,7 +392,7 @@ class CBF(Stage):
 
     def _front(self, part: int, frames: Iterator[int], ops: tuple, src: tuple) -> None:
         """Frames taken from ``frames``, one at a time while it is in cache: window, FFT, and
-        pack its band into rows ``s`` and ``S + s`` of the GEMM operands (worker ``part``)."""
+        pack its band into its own contiguous piece of the operands (worker ``part``)."""
         x, offsets = src
         plan = self._part_plan(part, x.shape[1])
         win = self._win_cast()
@@ -400,24 +405,28 @@ class CBF(Stage):
             if not self._contig:
                 spec, f0 = spec[self._bins], 0
             if pairs is not None:
-                kb.pack_fold(spec, f0, pairs[0], pairs[1], s, ops[0], ops[1])
+                kb.pack_fold(spec, f0, pairs[0], pairs[1], ops[0][s], ops[1][s])
             else:
-                kb.pack_bins(spec, f0, s, ops[0])
+                kb.pack_bins(spec, f0, ops[0][s])
 
     def _back(self, part: int, chunks: Iterator[int], ops: tuple, y: np.ndarray) -> None:
-        """Chunks of bins taken from ``chunks`` (first bin of each), for every snapshot: one
+        """Chunks of bins taken from ``chunks`` (first bin of each), for every snapshot: the
+        corner turn of the chunk into per-bin operands in cache (:func:`gather_bins`), one
         real GEMM per bin and the unpack of its results into the beams (worker ``part``)."""
-        z = self._results(part, y.shape[0])
-        chunk, nf = z[0].shape[0], y.shape[1]
+        w = self._results(part, y.shape[0], ops[0].shape[3])
+        chunk, nf = w[0].shape[0], y.shape[1]
         for c in chunks:
-            e = min(nf, c + chunk)
+            n = min(nf, c + chunk) - c
             if self._pairs is not None:
-                za = np.matmul(ops[0][c:e], self._steer[0][c:e], out=z[0][:e - c])
-                zb = np.matmul(ops[1][c:e], self._steer[1][c:e], out=z[1][:e - c])
+                kb.gather_bins(ops[0], c, w[0][:n])
+                kb.gather_bins(ops[1], c, w[1][:n])
+                za = np.matmul(w[0][:n], self._steer[0][c:c + n], out=w[2][:n])
+                zb = np.matmul(w[1][:n], self._steer[1][c:c + n], out=w[3][:n])
                 kb.unpack_fold(za, zb, self._runs, y, c)
             else:
-                zz = np.matmul(ops[0][c:e], self._steer[c:e], out=z[0][:e - c])
-                kb.unpack_beams(zz, self._uidx, self._sign, y, c)
+                kb.gather_bins(ops[0], c, w[0][:n])
+                z = np.matmul(w[0][:n], self._steer[c:c + n], out=w[1][:n])
+                kb.unpack_beams(z, self._uidx, self._sign, y, c)
 
     def _out_buffer(self, shape: tuple[int, ...]) -> np.ndarray:
         """An output array of ``shape`` (S, F, B): the first S snapshots of a full-batch
