@@ -47,6 +47,7 @@ BAND = (100.0, 2000.0)
 BEAMS = {"start": 0.0, "stop": 180.0, "count": 181}
 BLOCK = 8192
 C = 1500.0
+BLAS_SETTLE_S = 0.5  # pause after numpy's multithreaded GEMM (its threads spin when idle)
 
 
 _POOL = [np.random.default_rng(k).standard_normal((BLOCK, N_CH)).astype(np.float32)
@@ -230,6 +231,9 @@ def main() -> None:
         ref_s.append(numpy_reference(args.ref_snapshots))
         ref32_s.append(numpy_reference(args.ref_snapshots, single=True))
         batched_s.append(numpy_batched(max(128, 4 * args.ref_snapshots)))
+        # OpenBLAS's threads busy-wait for a while after a multithreaded GEMM returns; a run
+        # started at once shares the two cores with them (10-13 % slower, measured)
+        time.sleep(BLAS_SETTLE_S)
         cbf_s.append(run_stage(args.seconds, threads=args.threads))
         both_s.append(run_stage(args.seconds, integrate=True, threads=args.threads))
     rt_cbf = args.seconds / min(cbf_s)
