@@ -348,26 +348,25 @@ class CBF(Stage):
 
     def beamform(self, frames: np.ndarray) -> np.ndarray:
         """Beam outputs (S, F, B) complex64 of time frames (S, nfft, C) (after :meth:`_prepare`)."""
-        s_n, n, n_ch = frames.shape
-        x = np.ascontiguousarray(frames, self._dtype()).reshape(s_n * n, n_ch)
-        offsets = np.arange(s_n, dtype=np.int64) * n
+        x = np.ascontiguousarray(frames, self._dtype())
+        srcs = [(x[s], 0) for s in range(x.shape[0])]
         out = []
-        for a in range(0, s_n, self.batch):
-            b = min(s_n, a + self.batch)
-            out.append(self._beamform_frames(b - a, (x, offsets[a:b])).copy())
+        for a in range(0, len(srcs), self.batch):
+            out.append(self._beamform_frames(srcs[a:a + self.batch]).copy())
         return np.concatenate(out)
 
-    def _beamform_frames(self, s_n: int, src: tuple) -> np.ndarray:
-        """Beams (S, F, B) of the ``s_n`` frames starting at ``src[1]`` in the time-major buffer
-        ``src[0]`` (T, C), in two parallel phases on the worker threads. First each frame is
-        windowed, transformed and packed into the batch's GEMM operands (:meth:`_front`), then
-        each chunk of bins gets its GEMMs and its unpack, over all snapshots (:meth:`_back`).
-        The workers take frames, then chunks, from a shared queue (an iterator: its ``next``
-        is atomic), so a worker slowed down by the machine does not hold the batch up, and
-        the chunks of the steering matrix (17.7 MB for the issue-4 configuration) are read
-        once per batch, not once per worker."""
+    def _beamform_frames(self, srcs: list[tuple[np.ndarray, int]]) -> np.ndarray:
+        """Beams (S, F, B) of the frames ``srcs`` — frame s is ``srcs[s][0][o:o + nfft]`` with
+        ``o = srcs[s][1]``, time-major (T, C) arrays — in two parallel phases on the worker
+        threads. First each frame is windowed, transformed and packed into the batch's GEMM
+        operands (:meth:`_front`), then each chunk of bins gets its GEMMs and its unpack, over
+        all snapshots (:meth:`_back`). The workers take frames, then chunks, from a shared
+        queue (an iterator: its ``next`` is atomic), so a worker slowed down by the machine
+        does not hold the batch up, and the chunks of the steering matrix (17.7 MB for the
+        issue-4 configuration) are read once per batch, not once per worker."""
+        s_n = len(srcs)
         n_thr = self.threads or (os.cpu_count() or 1)
-        nf, n_ch = self._bins.size, src[0].shape[1]
+        nf, n_ch = self._bins.size, srcs[0][0].shape[1]
         y = self._out_buffer((s_n, nf, self._uidx.size))
         ops = self._operands(s_n, n_ch)
         chunk = min(nf, BINS_PER_TASK)
@@ -379,27 +378,28 @@ class CBF(Stage):
         if n_parts == 1:
             old = set_local_threads(1)
             try:
-                self._front(0, frames, ops, src)
+                self._front(0, frames, ops, srcs)
                 self._back(0, chunks, ops, y)
             finally:
                 if old is not None:
                     set_local_threads(old)
         else:
             pool = _pool(n_parts)
-            list(pool.map(lambda i: self._front(i, frames, ops, src), range(n_parts)))
+            list(pool.map(lambda i: self._front(i, frames, ops, srcs), range(n_parts)))
             list(pool.map(lambda i: self._back(i, chunks, ops, y), range(n_parts)))
         return y
 
-    def _front(self, part: int, frames: Iterator[int], ops: tuple, src: tuple) -> None:
+    def _front(self, part: int, frames: Iterator[int], ops: tuple,
+               srcs: list[tuple[np.ndarray, int]]) -> None:
         """Frames taken from ``frames``, one at a time while it is in cache: window, FFT, and
         pack its band into its own contiguous piece of the operands (worker ``part``)."""
-        x, offsets = src
-        plan = self._part_plan(part, x.shape[1])
+        plan = self._part_plan(part, srcs[0][0].shape[1])
         win = self._win_cast()
         first = int(self._bins[0])
         pairs = self._pairs
         for s in frames:
-            kb.window_frame(x, int(offsets[s]), win, plan.input)
+            x, offset = srcs[s]
+            kb.window_frame(x, offset, win, plan.input)
             spec = plan()  # (F_all, C)
             f0 = first
             if not self._contig:
@@ -461,14 +461,16 @@ class CBF(Stage):
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         # Frames on the stream's absolute sample grid (frame k starts at sample k·hop, as
-        # chain.FrameBuffer). The samples of the pending frames wait, time-major as they come,
-        # in a buffer of one batch's span; the workers window and transpose their frames from
-        # it when the batch is full (no serial per-frame work in this loop).
-        buf: np.ndarray | None = None  # (capacity, C) raw samples; buf[0] is sample buf_start
-        fill = 0
-        buf_start = 0
+        # chain.FrameBuffer). The workers window each frame straight out of the input block
+        # that holds it (the stage keeps the blocks its pending frames need; blocks are not
+        # modified once yielded, as everywhere in the chain); only a frame that straddles two
+        # blocks is first copied together into a staging slot. No copy of the stream, so the
+        # calling thread has almost nothing to do between batches.
+        segs: list[tuple[int, np.ndarray]] = []  # retained blocks: (first sample, (n, C) data)
+        end: int | None = None  # sample after the last retained block's last valid one
         nxt = 0  # absolute sample index of the next frame's start
         starts: list[int] = []
+        srcs: list[tuple[np.ndarray, int]] = []
         last: Block | None = None
         index = 0
         nfft, hop = self.nfft, self.hop
@@ -476,8 +478,9 @@ class CBF(Stage):
         def emit() -> Block:
             nonlocal index
             st = np.asarray(starts, np.int64)
+            y = self._beamform_frames(srcs)
             starts.clear()
-            y = self._beamform_frames(st.size, (buf, st - buf_start))
+            srcs.clear()
             fs = last.fs
             times = (st + 0.5 * nfft) / fs
             heading = last.pose.heading if last.pose is not None else 0.0
@@ -492,15 +495,24 @@ class CBF(Stage):
             index += y.shape[0]
             return out
 
-        def compact() -> None:
-            """Drop the buffered samples before the first pending (or next) frame."""
-            nonlocal fill, buf_start
-            keep_from = starts[0] if starts else nxt
-            drop = min(max(0, keep_from - buf_start), fill)
-            if drop:
-                buf[:fill - drop] = buf[drop:fill]
-                fill -= drop
-                buf_start += drop
+        def frame_source(a: int) -> tuple[np.ndarray, int]:
+            """Where the frame starting at sample ``a`` lies: (array, first row)."""
+            k = 0
+            while a >= segs[k][0] + segs[k][1].shape[0]:
+                k += 1
+            s0, d = segs[k]
+            if a + nfft <= s0 + d.shape[0]:
+                return d, a - s0
+            slot = self._staging(len(srcs), d.shape[1], d.dtype)  # straddles blocks
+            pos = 0
+            for s0, d in segs[k:]:
+                lo = a + pos - s0
+                take = min(nfft - pos, d.shape[0] - lo)
+                slot[pos:pos + take] = d[lo:lo + take]
+                pos += take
+                if pos == nfft:
+                    break
+            return slot, 0
 
         for b in blocks:
             if b.domain != ("time", "channel"):
@@ -512,38 +524,41 @@ class CBF(Stage):
                                      != np.iscomplexobj(last.data)):
                 if starts:
                     yield emit()  # geometry changed: flush with the old steering
-                buf = None
+                segs.clear()
+                end = None
             self._prepare(b)
             last = b
             x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
             s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
-            if buf is None or buf_start + fill != s0:  # start, or a gap in the stream
+            if end is None or end != s0:  # start, or a gap in the stream
                 if starts:
                     yield emit()
-                buf = np.empty(((self.batch - 1) * hop + nfft, x.shape[1]), self._dtype())
-                fill = 0
-                buf_start = s0
+                segs.clear()
                 nxt = max(nxt, -(-s0 // hop) * hop)
-            pos, n = 0, x.shape[0]
-            while pos < n:
-                if fill == 0 and buf_start < nxt:  # samples before the next frame: skip
-                    skip = min(nxt - buf_start, n - pos)
-                    pos += skip
-                    buf_start += skip
-                    continue
-                take = min(n - pos, buf.shape[0] - fill)
-                buf[fill:fill + take] = x[pos:pos + take]
-                fill += take
-                pos += take
-                while nxt + nfft <= buf_start + fill:
-                    starts.append(nxt)
-                    nxt += hop
-                    if len(starts) == self.batch:
-                        yield emit()
-                if fill == buf.shape[0] or not starts:
-                    compact()
+            if x.shape[0] == 0:
+                end = s0
+                continue
+            segs.append((s0, x))
+            end = s0 + x.shape[0]
+            while nxt + nfft <= end:
+                srcs.append(frame_source(nxt))
+                starts.append(nxt)
+                nxt += hop
+                if len(starts) == self.batch:
+                    yield emit()
+            while segs and segs[0][0] + segs[0][1].shape[0] <= nxt:
+                segs.pop(0)  # no later frame needs it (pending frames hold their arrays)
         if starts and last is not None:
             yield emit()
+
+    def _staging(self, slot: int, n_ch: int, dtype: np.dtype) -> np.ndarray:
+        """Staging slot ``slot`` (nfft, C) for a frame that straddles two input blocks; one
+        per frame of a batch, allocated once per stream."""
+        st = self.__dict__.get("_stage")
+        if st is None or st.shape[1:] != (self.nfft, n_ch) or st.dtype != dtype \
+                or st.shape[0] < self.batch:
+            st = self._stage = np.empty((self.batch, self.nfft, n_ch), dtype)
+        return st[slot]
 
     def warmup_seconds(self, fs: float) -> float:
         return self.nfft / fs
