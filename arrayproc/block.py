@@ -64,6 +64,10 @@ class Block:
         Running number of the snapshot within its stream.
     meta : dict
         Anything else a stage wants to pass downstream (e.g. ``nfft``, ``window`` gain).
+
+    A block's ``data`` is not modified once the block is yielded, by its producer or by any
+    consumer: stages may keep references to their input blocks (the ``cbf`` stage windows its
+    frames straight out of them) and a fan-out hands the same block to several branches.
     """
 
     data: np.ndarray
