@@ -240,13 +240,27 @@ def test_kernels_against_numpy(rng):
     p = np.empty(y.size, np.float32)
     kb.abs2(y.reshape(-1), p)
     assert np.allclose(p, np.abs(y.reshape(-1)) ** 2, rtol=1e-6)
-    q = rng.random((11, 4)).astype(np.float32)
-    for n, step in ((3, 1), (3, 3), (4, 2), (1, 1)):
-        k = (11 - n) // step + 1
-        o = np.empty((k, 4), np.float32)
-        kb.window_sums(q, n, step, o)
-        want = np.stack([q[i * step:i * step + n].sum(0) for i in range(k)])
-        assert np.allclose(o, want, rtol=1e-6)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 5), st.integers(0, 9), st.integers(1, 5), st.integers(1, 6),
+       st.integers(0, 2**31 - 1))
+def test_power_sums_against_numpy(h, t, n, step, seed):
+    """kernels.beamform.power_sums: window sums over [head; |y|²] for any carried-over rows,
+    window and step (blockwise and sliding), on a column range only."""
+    g = np.random.default_rng(seed)
+    m = 7
+    head = g.random((h, m)).astype(np.float32)
+    y = (g.standard_normal((t, m)) + 1j * g.standard_normal((t, m))).astype(np.complex64)
+    rows = np.concatenate([head, (np.abs(y) ** 2).astype(np.float32)])
+    if rows.shape[0] < n:
+        return
+    k = (rows.shape[0] - n) // step + 1
+    out = np.full((k, m), -1.0, np.float32)
+    kb.power_sums(head, y, n, step, 2, 6, out, np.empty(m))
+    want = np.stack([rows[i * step:i * step + n].astype(np.float64).sum(0) for i in range(k)])
+    np.testing.assert_allclose(out[:, 2:6], want[:, 2:6], rtol=1e-5)
+    assert np.all(out[:, :2] == -1) and np.all(out[:, 6:] == -1)
 
 
 # -- properties ----------------------------------------------------------------------------------

@@ -55,6 +55,24 @@ def test_sums_match_direct_computation(rng, mode, sizes):
     assert np.all(np.minimum(h, 360 - h) < 1e-6)
 
 
+@pytest.mark.parametrize("mode", ["blockwise", "sliding"])
+def test_threads_split_the_cells_and_change_nothing(rng, mode):
+    """With enough (freq, beam) cells the sums run on several workers, each on its part of
+    the cells: the result is the single-thread one to the bit, and the direct sums."""
+    y = (rng.standard_normal((21, 40, 300)) + 1j * rng.standard_normal((21, 40, 300)))
+    y = y.astype(np.complex64)
+    res = {}
+    for th in (1, 2, 3):
+        st = Integrate(snapshots=4, mode=mode, threads=th)
+        res[th] = np.concatenate([o.data for o in st.process(snapshot_blocks(y, (5, 9)))])
+    np.testing.assert_array_equal(res[2], res[1])
+    np.testing.assert_array_equal(res[3], res[1])
+    p = np.abs(y.astype(np.complex128)) ** 2
+    step = 4 if mode == "blockwise" else 1
+    want = np.stack([p[a:a + 4].sum(0) for a in range(0, 21 - 4 + 1, step)])
+    np.testing.assert_allclose(res[1], want, rtol=1e-5)
+
+
 def test_mean_option_divides_by_n(rng):
     y = rng.standard_normal((8, 2, 2)).astype(np.complex64)
     a = np.concatenate([o.data for o in Integrate(snapshots=4).process(snapshot_blocks(y, (8,)))])

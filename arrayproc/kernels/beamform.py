@@ -127,30 +127,51 @@ def abs2(y: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def window_sums(p: np.ndarray, n: int, step: int, out: np.ndarray) -> None:
-    """Sums of ``n`` consecutive snapshots of ``p`` (T, M) every ``step`` snapshots.
+def power_sums(head: np.ndarray, y: np.ndarray, n: int, step: int, lo: int, hi: int,
+               out: np.ndarray, acc: np.ndarray) -> None:
+    """Sums of ``n`` consecutive snapshot powers every ``step`` snapshots (thesis eq. 2.22),
+    straight from the complex beams, for the columns ``lo:hi``.
 
-    ``out`` (K, M) with K = (T - n) // step + 1; accumulates in float64 (thesis eq. 2.22).
+    The snapshots are the rows of ``head`` (h, M) float32 — powers carried over from the
+    previous block — followed by ``|y|²`` of the rows of ``y`` (T, M) complex. ``out`` (K, M)
+    receives window k = rows k·step .. k·step + n − 1; ``acc`` (M,) float64 is scratch (the
+    sums accumulate in float64). Blockwise (step >= n) sums each window afresh; a sliding
+    window (step < n) adds the snapshots that come in and drops those that leave.
     """
+    h = head.shape[0]
     k_out = out.shape[0]
-    m = p.shape[1]
-    acc = np.zeros(m)
+    c0, c1 = uint64(lo), uint64(hi)
     for k in range(k_out):
         a = k * step
         if k == 0 or step >= n:
-            acc[:] = 0.0
-            for j in range(a, a + n):
-                for i in range(m):
-                    acc[i] += p[j, i]
-        else:  # slide: drop the snapshots that left, add the ones that came in
-            for j in range(a - step, a):
-                for i in range(m):
-                    acc[i] -= p[j, i]
-            for j in range(a + n - step, a + n):
-                for i in range(m):
-                    acc[i] += p[j, i]
-        for i in range(m):
-            out[k, i] = acc[i]
+            add0, add1, sub0, sub1 = a, a + n, 0, 0
+            for i in range(c0, c1):
+                acc[i] = 0.0
+        else:
+            add0, add1, sub0, sub1 = a + n - step, a + n, a - step, a
+        for r in range(add0, add1):
+            if r < h:
+                row = head[r]
+                for i in range(c0, c1):
+                    acc[i] += row[i]
+            else:
+                yr = y[r - h]
+                for i in range(c0, c1):
+                    v = yr[i]
+                    acc[i] += v.real * v.real + v.imag * v.imag
+        for r in range(sub0, sub1):
+            if r < h:
+                row = head[r]
+                for i in range(c0, c1):
+                    acc[i] -= row[i]
+            else:
+                yr = y[r - h]
+                for i in range(c0, c1):
+                    v = yr[i]
+                    acc[i] -= v.real * v.real + v.imag * v.imag
+        o = out[k]
+        for i in range(c0, c1):
+            o[i] = acc[i]
 
 
 # -- centro-symmetric arrays (e.g. uniform line arrays): fold element pairs --------------------

@@ -41,15 +41,13 @@ with single-threaded BLAS.
 from __future__ import annotations
 
 import math
-import os
 import sys
 from collections.abc import Iterator
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from scipy.signal import get_window
 
-from .. import fft
+from .. import fft, workers
 from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
@@ -60,16 +58,6 @@ from ..shading import shading_weights
 
 WINDOWS = ("none", "hann", "hamming", "blackman", "blackmanharris")
 BINS_PER_TASK = 32  # bins per GEMM call of a worker
-
-_pools: dict[int, ThreadPoolExecutor] = {}
-
-
-def _pool(n: int) -> ThreadPoolExecutor:
-    if n not in _pools:
-        _pools[n] = ThreadPoolExecutor(n, thread_name_prefix="cbf",
-                                       initializer=set_local_threads, initargs=(1,))
-    return _pools[n]
-
 
 def _aligned(shape: tuple[int, ...], align: int = 64) -> np.ndarray:
     """An uninitialised float32 array whose data starts on an ``align``-byte (cache-line)
@@ -365,7 +353,7 @@ class CBF(Stage):
         does not hold the batch up, and the chunks of the steering matrix (17.7 MB for the
         issue-4 configuration) are read once per batch, not once per worker."""
         s_n = len(srcs)
-        n_thr = self.threads or (os.cpu_count() or 1)
+        n_thr = workers.count(self.threads)
         nf, n_ch = self._bins.size, srcs[0][0].shape[1]
         y = self._out_buffer((s_n, nf, self._uidx.size))
         ops = self._operands(s_n, n_ch)
@@ -384,7 +372,7 @@ class CBF(Stage):
                 if old is not None:
                     set_local_threads(old)
         else:
-            pool = _pool(n_parts)
+            pool = workers.pool(n_parts)
             list(pool.map(lambda i: self._front(i, frames, ops, srcs), range(n_parts)))
             list(pool.map(lambda i: self._back(i, chunks, ops, y), range(n_parts)))
         return y

@@ -21,10 +21,11 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from .. import workers
 from ..block import Block
 from ..chain import Param, Stage, positive, register
 from ..errors import ConfigError
-from ..kernels.beamform import abs2, window_sums
+from ..kernels.beamform import abs2, power_sums
 
 
 def _circ_mean_deg(a: np.ndarray, axis: int = -1) -> np.ndarray:
@@ -42,6 +43,8 @@ class Integrate(Stage):
         "mode": Param("str", "blockwise", "disjoint sums or a sliding sum",
                       choices=("blockwise", "sliding")),
         "mean": Param("bool", False, "divide the sum by N_B"),
+        "threads": Param("int", 0, "worker threads, each on a part of the (freq, beam) cells "
+                         "(0: all cores)"),
     }
 
     def warmup_seconds(self, fs: float) -> float:
@@ -64,11 +67,10 @@ class Integrate(Stage):
                 raise ConfigError(f"stage {self.name!r}: needs ('snapshot', 'freq', 'beam') "
                                   f"blocks (from cbf), got {b.domain}")
             y = b.data
-            p = np.empty(y.shape, np.float32)
-            if np.iscomplexobj(y):
-                abs2(np.ascontiguousarray(y, np.complex64).reshape(-1), p.reshape(-1))
-            else:
-                p[...] = y
+            if np.iscomplexobj(y):  # powers are taken inside the sums, never stored whole
+                y = np.ascontiguousarray(y, np.complex64)
+            else:  # already powers: they join the carried-over rows
+                y = np.ascontiguousarray(y, np.float32)
             times = np.asarray(b.meta.get("times", np.full(y.shape[0], b.t_centre)), float)
             heads = np.asarray(b.meta.get("headings", np.zeros(y.shape[0])), float)
             if "starts" in b.meta and b.meta.get("hop"):
@@ -76,24 +78,32 @@ class Integrate(Stage):
             else:
                 ks = count + np.arange(y.shape[0], dtype=np.int64)
             count = int(ks[-1]) + 1 if ks.size else count
-            if tail_p is not None and (tail_p.shape[1:] != p.shape[1:] or (
+            if tail_p is not None and (tail_p.shape[1:] != y.shape[1:] or (
                     tail_k.size and ks.size and ks[0] != tail_k[-1] + 1)):
                 tail_p = None  # axes changed or snapshots missing: start afresh
                 tail_t, tail_h, tail_k = np.zeros(0), np.zeros(0), np.zeros(0, np.int64)
-            buf = p if tail_p is None or tail_p.shape[0] == 0 else np.concatenate([tail_p, p])
+            head = tail_p if tail_p is not None else np.zeros((0,) + y.shape[1:], np.float32)
+            if not np.iscomplexobj(y):
+                head, y = np.concatenate([head, y]), np.zeros((0,) + y.shape[1:], np.complex64)
             tb = np.concatenate([tail_t, times])
             hb = np.concatenate([tail_h, heads])
             kb = np.concatenate([tail_k, ks])
+            lead = 0
             if self.mode == "blockwise" and kb.size:
                 # windows on the absolute snapshot grid (snapshot k·N starts one), so a run
                 # started anywhere (a segment with warm-up) integrates the same snapshots
                 lead = min(int((-kb[0]) % n), kb.size)
-                buf, tb, hb, kb = buf[lead:], tb[lead:], hb[lead:], kb[lead:]
-            t_n = buf.shape[0]
+                tb, hb, kb = tb[lead:], hb[lead:], kb[lead:]
+            if lead >= head.shape[0]:  # the rows in use: head[lead:] then |y[..]|²
+                y = y[lead - head.shape[0]:]
+                head = head[:0]
+            else:
+                head = head[lead:]
+            t_n = head.shape[0] + y.shape[0]
             k = 0 if t_n < n else (t_n - n) // step + 1
             if k:
-                out = np.empty((k,) + buf.shape[1:], np.float32)
-                window_sums(buf.reshape(t_n, -1), n, step, out.reshape(k, -1))
+                out = np.empty((k,) + y.shape[1:], np.float32)
+                self._sums(head, y, n, step, out)
                 if self.mean:
                     out /= n
                 starts = np.arange(k) * step
@@ -108,9 +118,30 @@ class Integrate(Stage):
                 span = float(tb[win_idx[-1, -1]] - tb[0]) + d
                 yield b.replace(data=out, t0=t0, span=span, index=index, meta=meta)
                 index += k
-            used = k * step
-            tail_p = buf[used:].copy() if used < t_n else buf[:0]
+            used = k * step  # the rows not yet used are carried over, as powers
+            rest_y = y[max(0, used - head.shape[0]):]
+            p = np.empty(rest_y.shape, np.float32)
+            abs2(rest_y.reshape(-1), p.reshape(-1))
+            tail_p = np.concatenate([head[used:], p])
             tail_t, tail_h, tail_k = tb[used:], hb[used:], kb[used:]
+
+    def _sums(self, head: np.ndarray, y: np.ndarray, n: int, step: int,
+              out: np.ndarray) -> None:
+        """``out`` = the window sums of the rows [head; |y|²] (kernels.beamform.power_sums),
+        the (freq, beam) cells split over the worker threads."""
+        m = out[0].size
+        acc = self.__dict__.get("_acc")
+        if acc is None or acc.size < m:
+            acc = self._acc = np.empty(m)
+        args = (head.reshape(head.shape[0], m), y.reshape(y.shape[0], m), n, step)
+        o2 = out.reshape(out.shape[0], m)
+        n_thr = max(1, min(workers.count(self.threads), m // 4096))
+        edges = [m * i // n_thr for i in range(n_thr + 1)]
+        if n_thr == 1:
+            power_sums(*args, 0, m, o2, acc)
+            return
+        list(workers.pool(n_thr).map(
+            lambda i: power_sums(*args, edges[i], edges[i + 1], o2, acc), range(n_thr)))
 
 
 def check_power_block(stage: Stage, b: Block) -> None:
