@@ -509,7 +509,7 @@ def test_gap_in_the_stream_starts_a_new_frame_run_on_the_absolute_grid(rng):
 
 
 @settings(max_examples=20, deadline=None)
-@given(st.lists(st.integers(1, 700), min_size=1, max_size=6), st.sampled_from([64, 100, 256]),
+@given(st.lists(st.integers(1, 700), min_size=1, max_size=6), st.sampled_from([64, 100, 256, 300]),
        st.integers(1, 4), st.integers(0, 2**31 - 1))
 def test_frames_do_not_depend_on_how_the_stream_is_cut(sizes, hop, batch, seed):
     """The stage frames its input out of the blocks as they come (a frame that straddles
