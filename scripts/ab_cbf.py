@@ -1,0 +1,85 @@
+"""Paired A/B of the ``cbf`` stage: this checkout against the package at another git revision.
+
+The machine's speed drifts by ±15 % within minutes, so two designs are only comparable when
+they run interleaved in one process. This script extracts ``arrayproc/`` at ``--base`` (``git
+archive``) into a temporary directory under another package name, builds the issue-4 CBF
+(``scripts/bench_cbf.py``'s configuration) from both packages, checks that they give the same
+beams, and times them in alternating order: ``--pairs`` pairs of ``--seconds`` of data each.
+Printed: min and median ms per snapshot of each, and the median and quartiles of the paired
+ratio (this checkout / base).
+
+    .venv/bin/python scripts/ab_cbf.py --base 83ba04b [--pairs 12] [--seconds 60] [--batch 32]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import io
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from bench_cbf import BAND, BEAMS, HOP, NFFT, source
+
+
+def load_base(rev: str, root: Path, tmp: Path):
+    """The ``arrayproc`` package at ``rev``, importable as ``arrayproc_base``."""
+    data = subprocess.run(["git", "archive", rev, "arrayproc"], cwd=root, check=True,
+                          capture_output=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
+        tar.extractall(tmp, filter="data")
+    (tmp / "arrayproc").rename(tmp / "arrayproc_base")
+    sys.path.insert(0, str(tmp))
+    return importlib.import_module("arrayproc_base.stages.cbf")
+
+
+def run(stage, seconds: float) -> float:
+    t = time.perf_counter()
+    for _ in stage.process(source(seconds)):
+        pass
+    return time.perf_counter() - t
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", required=True, help="git revision to compare against")
+    ap.add_argument("--pairs", type=int, default=12)
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--batch", type=int, default=32)
+    ap.add_argument("--threads", type=int, default=0)
+    args = ap.parse_args()
+    from arrayproc.stages.cbf import CBF
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        base_cbf = load_base(args.base, root, Path(tmp))
+        kw = dict(nfft=NFFT, hop=HOP, window="hann", band=list(BAND), beams=BEAMS,
+                  batch=args.batch, threads=args.threads)
+        stages = {"base": base_cbf.CBF(**kw), "new": CBF(**kw)}
+        outs = []
+        for st in stages.values():  # warm-up (numba compile or cache, plans), then output
+            run(st, 5.0)
+            outs.append(np.concatenate([b.data.copy() for b in st.process(source(10.0))]))
+        diff = np.abs(outs[0] - outs[1]).max() / np.abs(outs[0]).max()
+        print(f"max relative difference of the beams, new vs base: {diff:.2e} (the two "
+              "stages may pick different FFT back-ends, whose roundings differ)")
+        n_snap = int((args.seconds * 5120 - NFFT) // HOP) + 1
+        times: dict[str, list[float]] = {k: [] for k in stages}
+        for i in range(args.pairs):
+            order = list(stages) if i % 2 == 0 else list(stages)[::-1]
+            for k in order:
+                times[k].append(run(stages[k], args.seconds) / n_snap * 1e3)
+    for k, v in times.items():
+        print(f"{k:5s} ms per snapshot: min {min(v):.3f}, median {np.median(v):.3f}")
+    r = np.array(times["new"]) / np.array(times["base"])
+    q1, q3 = np.percentile(r, [25, 75])
+    print(f"paired ratio new/base: median {np.median(r):.3f}, quartiles {q1:.3f}-{q3:.3f} "
+          f"({args.pairs} pairs of {args.seconds:g} s)")
+
+
+if __name__ == "__main__":
+    main()
