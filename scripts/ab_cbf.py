@@ -20,11 +20,10 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
-from bench_cbf import BAND, BEAMS, HOP, NFFT, source
+from bench_cbf import BAND, BEAMS, HOP, NFFT, source, time_stage
 
 
 def load_base(rev: str, root: Path, tmp: Path):
@@ -37,12 +36,6 @@ def load_base(rev: str, root: Path, tmp: Path):
     sys.path.insert(0, str(tmp))
     return importlib.import_module("arrayproc_base.stages.cbf")
 
-
-def run(stage, seconds: float) -> float:
-    t = time.perf_counter()
-    for _ in stage.process(source(seconds)):
-        pass
-    return time.perf_counter() - t
 
 
 def main() -> None:
@@ -62,7 +55,7 @@ def main() -> None:
         stages = {"base": base_cbf.CBF(**kw), "new": CBF(**kw)}
         outs = []
         for st in stages.values():  # warm-up (numba compile or cache, plans), then output
-            run(st, 5.0)
+            time_stage(st, 5.0)
             outs.append(np.concatenate([b.data.copy() for b in st.process(source(10.0))]))
         diff = np.abs(outs[0] - outs[1]).max() / np.abs(outs[0]).max()
         print(f"max relative difference of the beams, new vs base: {diff:.2e} (the two "
@@ -72,7 +65,7 @@ def main() -> None:
         for i in range(args.pairs):
             order = list(stages) if i % 2 == 0 else list(stages)[::-1]
             for k in order:
-                times[k].append(run(stages[k], args.seconds) / n_snap * 1e3)
+                times[k].append(time_stage(stages[k], args.seconds) / n_snap * 1e3)
     for k, v in times.items():
         print(f"{k:5s} ms per snapshot: min {min(v):.3f}, median {np.median(v):.3f}")
     r = np.array(times["new"]) / np.array(times["base"])

@@ -79,6 +79,14 @@ def make_stage(threads: int) -> CBF:
 _CPU: dict[str, list[float]] = {}
 
 
+def time_stage(stage, seconds: float) -> float:
+    """Wall time (s) of ``stage.process`` over ``seconds`` of :func:`source` data."""
+    t = time.perf_counter()
+    for _ in stage.process(source(seconds)):
+        pass
+    return time.perf_counter() - t
+
+
 def run_stage(seconds: float, integrate: bool = False, threads: int = 0) -> float:
     """Wall time (s) of the cbf stage (optionally + integrate) over ``seconds`` of data; the
     process CPU time (all threads) is recorded in ``_CPU``."""

@@ -18,7 +18,7 @@ import time
 from collections import defaultdict
 
 import numpy as np
-from bench_cbf import BAND, BEAMS, HOP, NFFT, source
+from bench_cbf import BAND, BEAMS, HOP, NFFT, time_stage
 
 from arrayproc.kernels import beamform as kb
 from arrayproc.stages.cbf import CBF
@@ -68,12 +68,6 @@ class TimedCBF(CBF):
             t["unpack"] += t3 - t2
 
 
-def run(stage: CBF, seconds: float) -> float:
-    t = time.perf_counter()
-    for _ in stage.process(source(seconds)):
-        pass
-    return time.perf_counter() - t
-
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -91,13 +85,13 @@ def main() -> None:
     for th in args.threads:
         plain, timed = CBF(threads=th, **kw), TimedCBF(threads=th, **kw)
         for st in (plain, timed):  # warm-up: numba cache, FFT plan timing, buffers
-            run(st, 5.0)
-            run(st, args.seconds)
+            time_stage(st, 5.0)
+            time_stage(st, args.seconds)
         walls, twalls, best = [], [], None
         for _ in range(args.repeat):
-            walls.append(run(plain, args.seconds))
+            walls.append(time_stage(plain, args.seconds))
             timed.t.clear()
-            twalls.append(run(timed, args.seconds))
+            twalls.append(time_stage(timed, args.seconds))
             if twalls[-1] == min(twalls):
                 best = dict(timed.t)
         row = [best.get(s, 0.0) / n_snap * 1e3 for s in STEPS]
