@@ -1,9 +1,8 @@
 """The one place FFTs are computed: pyfftw with cached plans, falling back to scipy.fft.
 
-Hot loops use :class:`BufferedPlan`, which times the back-ends it has on the planned shape and
-keeps the fastest: FFTW (pyfftw), ``ducc0.fft`` (optional extra ``fast``; SIMD across the
-transforms of a batch, the fastest here for the CBF's per-snapshot (2048, 64) transform) or
-``scipy.fft``.
+Hot loops use :class:`BufferedPlan` (fixed-shape reusable buffers), which runs ``ducc0.fft``
+when it is installed (optional extra ``fast``; SIMD across the transforms of a batch, the
+fastest here for every shape the stages plan), else ``scipy.fft``; FFTW on request.
 
 Both back-ends keep single precision for float32/complex64 input. Outputs are fresh arrays the
 caller owns. ``set_threads`` sets the FFTW thread count. The default is one thread: the
@@ -108,12 +107,14 @@ class BufferedPlan:
     on the next call; with scipy a fresh array). Large FFTW transforms (>= 2**20 points) are
     planned with ``FFTW_MEASURE``, small ones with ``FFTW_ESTIMATE``.
 
-    ``backend="auto"`` times every back-end it has (FFTW, ducc0, scipy.fft; one thread each)
-    on the planned shape when the plan is built and keeps the fastest; ``"fftw"``, ``"ducc0"``
-    or ``"scipy"`` forces one. On this project's machine the pyfftw wheel's single-precision
-    FFTW ran 2-3x slower than scipy.fft for the CBF's and the DFT filter's transforms, and
-    ducc0 1.3-1.5x faster than scipy.fft for the CBF's per-snapshot (2048, 64) transform along
-    axis 0 (docs/performance.md). Results agree to float rounding whichever is used.
+    ``backend="auto"`` takes ``ducc0.fft`` when it is installed (optional extra ``fast``), else
+    ``scipy.fft``; ``"fftw"``, ``"ducc0"`` or ``"scipy"`` forces one. The choice is fixed, not
+    timed, so that the same input gives the same bytes in every run (a timed choice flipped
+    between back-ends of equal speed, whose roundings differ). Measured on this project's
+    machine, one thread (ms): the CBF's per-snapshot rfft (2048, 64) along axis 0, ducc0 0.16,
+    scipy.fft 0.19, the pyfftw wheel's FFTW 0.54; the DFT filter's rfft (8448, 64) 0.72, 1.22,
+    3.36 and its complex fft 1.34, 2.12, 5.99 (docs/performance.md). Results agree to float
+    rounding whichever is used.
     """
 
     KINDS = ("rfft", "irfft", "fft", "ifft")
@@ -128,22 +129,21 @@ class BufferedPlan:
         alloc = pyfftw.empty_aligned if HAVE_PYFFTW else np.empty
         self.input = alloc(shape, dtype)
         self.input[...] = 0
-        cands: dict[str, object] = {}
-        if HAVE_PYFFTW and backend in ("auto", "fftw"):
+        if backend == "auto":
+            backend = "ducc0" if HAVE_DUCC else "scipy"
+        if backend == "fftw" and HAVE_PYFFTW:
             effort = "FFTW_MEASURE" if self.input.size >= 1 << 20 else "FFTW_ESTIMATE"
-            cands["fftw"] = getattr(_builders, kind)(
+            self._run = getattr(_builders, kind)(
                 self.input, axis=axis, threads=_threads, planner_effort=effort,
                 overwrite_input=False, avoid_copy=True, auto_align_input=False,
                 auto_contiguous=False)
-        if HAVE_DUCC and backend in ("auto", "ducc0"):
-            cands["ducc0"] = self._ducc_runner()
-        if backend in ("auto", "scipy") or not cands:
-            cands["scipy"] = self._scipy
-        if len(cands) > 1:
-            self.backend = min(cands, key=lambda k: self._time(cands[k]))
+        elif backend == "ducc0" and HAVE_DUCC:
+            self._run = self._ducc_runner()
+        elif backend in ("scipy", "fftw", "ducc0"):  # scipy, or the fallback for a missing one
+            backend, self._run = "scipy", self._scipy
         else:
-            self.backend = next(iter(cands))
-        self._run = cands[self.backend]
+            raise ValueError(f"unknown FFT back-end {backend!r}")
+        self.backend = backend
 
     def _ducc_runner(self):
         """ducc0 transform into an output buffer the plan owns (numpy's normalisation)."""
@@ -163,17 +163,6 @@ class BufferedPlan:
         if self.kind == "fft":
             return lambda: _ducc.c2c(x, axes=ax, forward=True, out=out)
         return lambda: _ducc.c2c(x, axes=ax, forward=False, inorm=2, out=out)
-
-    @staticmethod
-    def _time(f, reps: int = 3) -> float:
-        import time
-        f()
-        best = np.inf
-        for _ in range(reps):
-            t = time.perf_counter()
-            f()
-            best = min(best, time.perf_counter() - t)
-        return best
 
     def _scipy(self) -> np.ndarray:
         return getattr(_sfft, self.kind)(self.input, axis=self.axis, workers=self._workers)
