@@ -109,8 +109,8 @@ class BufferedPlan:
 
     ``backend="auto"`` takes ``ducc0.fft`` when it is installed (optional extra ``fast``), else
     ``scipy.fft``; ``"fftw"``, ``"ducc0"`` or ``"scipy"`` forces one. The choice is fixed, not
-    timed, so that the same input gives the same bytes in every run (a timed choice flipped
-    between back-ends of equal speed, whose roundings differ). Measured on this project's
+    timed, so that the same input gives the same bytes in every run (on small shapes the
+    back-ends nearly tie, and their roundings differ). Measured on this project's
     machine, one thread (ms): the CBF's per-snapshot rfft (2048, 64) along axis 0, ducc0 0.16,
     scipy.fft 0.19, the pyfftw wheel's FFTW 0.54; the DFT filter's rfft (8448, 64) 0.72, 1.22,
     3.36 and its complex fft 1.34, 2.12, 5.99 (docs/performance.md). Results agree to float
