@@ -4,7 +4,7 @@ Hot loops use :class:`BufferedPlan` (fixed-shape reusable buffers), which runs `
 when it is installed (optional extra ``fast``; SIMD across the transforms of a batch, the
 fastest here for every shape the stages plan), else ``scipy.fft``; FFTW on request.
 
-Both back-ends keep single precision for float32/complex64 input. Outputs are fresh arrays the
+Every back-end keeps single precision for float32/complex64 input. Outputs are fresh arrays the
 caller owns. ``set_threads`` sets the FFTW thread count. The default is one thread: the
 stages already run their FFTs beside numba and BLAS threads, and on this project's 2-core
 machine a two-thread FFTW plan was measured 1.3-25x *slower* than a one-thread plan for the
