@@ -1,0 +1,112 @@
+"""From matched-filter peaks to contacts: bistatic range, bearings, absolute Doppler (thesis
+eq. (4.9)) and the merging of one echo seen on neighbouring beams.
+
+Range. The lag tau of a peak (s after the transmission) is the bistatic path: c tau = |s - p|
++ |s - a| with p the projector and a the array's reference point, s the scatterer. With the
+scatterer at range r from a along the beam's horizontal unit vector u (body frame), |r u - p|
+= c tau - r gives
+
+    r = ((c tau)^2 - |p|^2) / (2 (c tau - u . p)),
+
+with u . p = p_x cos(cone) for a line array (the port and starboard solutions differ only by
+p_y sin(cone); the projector's starboard offset is taken as 0 in this term, exact for a
+projector towed on the array's axis).
+
+Absolute Doppler, thesis eq. (4.9). Range rates here are positive *opening* (DESIGN section 3).
+A still scatterer seen by a platform moving at U along the array axis closes at U cos(cone)
+(two-way mean of the projector's and the array's legs, both towed at U), so its measured range
+rate is -U cos(cone), and
+
+    rdot_abs = rdot + U cos(cone)
+
+is zero for it: the thesis's rdot_abs = rdot~ - U cos(theta) with its Doppler counted positive
+closing. ``moving`` is |rdot_abs| > ``moving_threshold``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def bistatic_range(path: np.ndarray, cone_deg: np.ndarray, projector: np.ndarray) -> np.ndarray:
+    """Range (m) from the array's reference point of scatterers at bistatic path ``path``.
+
+    Parameters
+    ----------
+    path : ndarray
+        c tau, m (projector -> scatterer -> array).
+    cone_deg : ndarray
+        Cone angle of the beam, deg.
+    projector : (3,) ndarray
+        Projector offset in the body frame (forward, starboard, down), m.
+
+    Returns
+    -------
+    ndarray
+        Range, m (nan where the path is shorter than the direct path |p|).
+    """
+    L = np.asarray(path, float)
+    p = np.asarray(projector, float)
+    up = p[0] * np.cos(np.deg2rad(np.asarray(cone_deg, float)))
+    p2 = float(p @ p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = (L * L - p2) / (2.0 * (L - up))
+    return np.where(L > np.sqrt(p2), r, np.nan)
+
+
+def bistatic_path(r: np.ndarray, cone_deg: np.ndarray, projector: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`bistatic_range`: c tau (m) of a scatterer at range r and cone angle."""
+    r = np.asarray(r, float)
+    p = np.asarray(projector, float)
+    a = np.deg2rad(np.asarray(cone_deg, float))
+    return r + np.sqrt((r * np.cos(a) - p[0]) ** 2 + (r * np.sin(a)) ** 2 + p[2] ** 2)
+
+
+def absolute_doppler(range_rate: np.ndarray, cone_deg: np.ndarray,
+                     speed: np.ndarray | float) -> np.ndarray:
+    """rdot_abs = rdot + U cos(cone) (m/s; thesis eq. (4.9), opening-positive convention)."""
+    return np.asarray(range_rate, float) + np.asarray(speed, float) * np.cos(
+        np.deg2rad(np.asarray(cone_deg, float)))
+
+
+def bearings(heading_deg: np.ndarray | float, cone_deg: np.ndarray) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Port and starboard true bearings (deg, [0, 360)) of a cone angle: heading -+ cone."""
+    h = np.asarray(heading_deg, float)
+    c = np.asarray(cone_deg, float)
+    return np.mod(h - c, 360.0), np.mod(h + c, 360.0)
+
+
+def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_gate: float,
+          cone_gate: float) -> np.ndarray:
+    """Indices of the contacts kept when one echo shows on several beams (array main lobe and
+    sidelobes): greedy non-maximum suppression, strongest first; a contact is dropped when a
+    kept one lies within ``range_gate`` m and ``cone_gate`` deg.
+
+    Parameters
+    ----------
+    range_m, cone_deg, level : (n,) ndarray
+        Candidates' range (m), cone angle (deg) and level (any increasing measure, e.g. SNR).
+    range_gate, cone_gate : float
+        Gates, m and deg.
+
+    Returns
+    -------
+    ndarray of int
+        Kept indices, strongest first.
+    """
+    order = np.argsort(-np.asarray(level, float), kind="stable")
+    kept: list[int] = []
+    r = np.asarray(range_m, float)
+    c = np.asarray(cone_deg, float)
+    for i in order:
+        if not np.isfinite(r[i]):
+            continue
+        ok = True
+        for j in kept:
+            if abs(r[i] - r[j]) <= range_gate and abs(c[i] - c[j]) <= cone_gate:
+                ok = False
+                break
+        if ok:
+            kept.append(int(i))
+    return np.array(kept, np.int64)
