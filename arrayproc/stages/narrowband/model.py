@@ -1,0 +1,95 @@
+"""Measurement model of the narrowband EKF (thesis 3.2.1, eqs. (3.18)-(3.23)), in numpy.
+
+A line array of ``N_H`` elements at body-frame positions ``x_n`` (m, forward positive) moving
+forward at speed ``U`` receives a tonal of frequency ``f`` (Hz, as a stationary receiver would
+hear it) from cone angle ``θ`` (rad, 0 forward end-fire). With ``τ`` the time since the filter's
+(re)initialisation (s), the phase at element n is (thesis eq. (3.18), the hydrophone index term
+``δx (n − 1)`` generalised to the element's position ``x_n``)::
+
+    a   = 1 + U cos θ / c                 own-speed Doppler factor
+    f_D = f a
+    s_n = τ + x_n cos θ / c
+    Φ_n = 2π f_D s_n
+
+Real input (thesis eq. (3.21)): ``h_n = sin Φ_n``. Complex baseband input (the
+``dft_filter`` stage's ``complex = true`` output, mixed down by ``fc``): ``h_n = exp(j Ψ_n)``
+with ``Ψ_n = Φ_n − 2π fc τ``, used as the 2 N_H real measurements (Re, Im). Constant phase
+offsets (the absolute time origin, the mixing phase) are not in the state; the filter absorbs
+them through its frequency estimate, which is the start-up "ripple" of thesis fig. 3.6.
+
+Jacobian (thesis eq. (3.23) for the frequency column)::
+
+    ∂Φ_n/∂f = 2π a s_n
+    ∂Φ_n/∂θ = −2π f sin θ (U s_n + a x_n) / c
+
+Both grow with τ through ``s_n``: the reason the thesis re-initialises regularly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def phase(theta: float, f: float, tau: float, x: np.ndarray, speed: float,
+          c: float) -> np.ndarray:
+    """Element phases Φ_n (rad) of the model.
+
+    Parameters
+    ----------
+    theta : float
+        Cone angle, rad (0 forward end-fire).
+    f : float
+        Tonal frequency without own-speed Doppler, Hz.
+    tau : float
+        Time since the filter's (re)initialisation, s.
+    x : (N,) ndarray
+        Element positions along the body x axis, m (forward positive).
+    speed : float
+        Own speed along the array axis, m/s.
+    c : float
+        Sound speed, m/s.
+
+    Returns
+    -------
+    (N,) ndarray
+        Phases, rad.
+    """
+    a = 1.0 + speed * np.cos(theta) / c
+    return 2.0 * np.pi * f * a * (tau + x * np.cos(theta) / c)
+
+
+def phase_gradient(theta: float, f: float, tau: float, x: np.ndarray, speed: float,
+                   c: float) -> np.ndarray:
+    """∂Φ_n/∂(θ, f): (N, 2) array, rad/rad and rad/Hz (thesis eq. (3.23))."""
+    ct, st = np.cos(theta), np.sin(theta)
+    a = 1.0 + speed * ct / c
+    s = tau + x * ct / c
+    return np.stack([-2.0 * np.pi * f * st * (speed * s + a * x) / c,
+                     2.0 * np.pi * a * s], axis=1)
+
+
+def measurement(theta: float, f: float, tau: float, x: np.ndarray, speed: float, c: float,
+                fc: float | None = None) -> np.ndarray:
+    """Predicted measurement: ``sin Φ`` (N,) for real input (thesis eq. (3.21)), or
+    ``exp(j(Φ − 2π fc τ))`` (N,) complex for baseband input when ``fc`` is given (Hz)."""
+    ph = phase(theta, f, tau, x, speed, c)
+    if fc is None:
+        return np.sin(ph)
+    return np.exp(1j * (ph - 2.0 * np.pi * fc * tau))
+
+
+def jacobian(theta: float, f: float, tau: float, x: np.ndarray, speed: float, c: float,
+             fc: float | None = None) -> np.ndarray:
+    """Jacobian of :func:`measurement` w.r.t. (θ rad, f Hz): (N, 2) real for real input,
+    (N, 2) complex (∂Re + j ∂Im) for baseband input."""
+    ph = phase(theta, f, tau, x, speed, c)
+    g = phase_gradient(theta, f, tau, x, speed, c)
+    if fc is None:
+        return np.cos(ph)[:, None] * g
+    return 1j * np.exp(1j * (ph - 2.0 * np.pi * fc * tau))[:, None] * g
+
+
+def reflect_cone(theta: float) -> float:
+    """Fold a cone angle (rad) back into [0, π] (cos θ is even, so the model is unchanged)."""
+    t = np.mod(theta, 2.0 * np.pi)
+    return float(2.0 * np.pi - t if t > np.pi else t)
