@@ -46,7 +46,7 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=32)
     ap.add_argument("--threads", type=int, default=0)
     args = ap.parse_args()
-    from arrayproc.stages.cbf import CBF
+    from arrayproc.stages.beamform.cbf import CBF
     root = Path(__file__).resolve().parents[1]
     with tempfile.TemporaryDirectory() as tmp:
         base_cbf = load_base(args.base, root, Path(tmp))

@@ -34,10 +34,10 @@ import tracemalloc
 
 import numpy as np
 
-from arrayproc.block import Block
+from arrayproc.chain.block import Block
 from arrayproc.io.geometry import line_array
-from arrayproc.stages.cbf import CBF, time_window
-from arrayproc.stages.integrate import Integrate
+from arrayproc.stages.beamform.cbf import CBF, time_window
+from arrayproc.stages.passive.integrate import Integrate
 
 FS = 5120.0
 N_CH = 64
@@ -164,7 +164,7 @@ def bench_dft_filter(seconds: float, repeat: int) -> dict:
     one call (not streaming), both in × real time (best of ``repeat``)."""
     from scipy import signal
 
-    from arrayproc.stages.dft_filter import DFTFilter
+    from arrayproc.stages.condition.dft_filter import DFTFilter
     out = {}
     x = np.concatenate([_POOL[k % 4] for k in range(int(np.ceil(seconds * FS / BLOCK)))])
     for band, d in (([100.0, 2000.0], 1), ([100.0, 1200.0], 2)):

@@ -21,12 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from arrayproc.chain import RunContext, build_chain, run_chain
+from arrayproc.app.api import build_chain, run_chain
+from arrayproc.chain import RunContext
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter
 from arrayproc.io.recording import Recording, RecordingWriter
-from arrayproc.stages.ibf import IBF
-from arrayproc.stages.synthetic import ETAM, etam_reference
+from arrayproc.stages.beamform.etam import ETAM, etam_reference
+from arrayproc.stages.beamform.ibf import IBF
 
 N, DX, C, FS, U = 64, 0.36, 1500.0, 5120.0, 2.5
 BAND = [100.0, 1000.0]

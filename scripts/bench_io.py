@@ -17,7 +17,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from arrayproc.chain import build_chain, run_chain
+from arrayproc.app.api import build_chain, run_chain
 from arrayproc.io.geometry import line_array
 from arrayproc.io.recording import Recording, RecordingWriter
 

@@ -27,9 +27,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from arrayproc.acoustics.tl import load_default_table
+from arrayproc.evaluate.scenarios import get_scenario
 from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig, run_seeds
-from arrayproc.track.scenarios import get_scenario
-from arrayproc.track.tl import load_default_table
 
 
 def stonesoup_run(sc, times, obs, bearings_deg, n, seed):

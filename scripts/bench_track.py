@@ -19,10 +19,10 @@ import time
 import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
+from arrayproc.evaluate.montecarlo import LRScenario, run_case
 from arrayproc.track.filters import UKF
 from arrayproc.track.init import init_from_bearing
 from arrayproc.track.models import bearing_residual, bearing_sigma_mean, constant_velocity
-from arrayproc.track.montecarlo import LRScenario, run_case
 
 
 def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:

@@ -44,7 +44,7 @@ def main() -> None:
         chain = Path(a.chain) if a.chain else Path(d) / "pass.toml"
         if not a.chain:
             chain.write_text(PASS)
-        cmd = [sys.executable, "-m", "arrayproc.cli", "process", str(rec), "-c", str(chain),
+        cmd = [sys.executable, "-m", "arrayproc.app.cli", "process", str(rec), "-c", str(chain),
                "-o", str(Path(d) / "out.h5"), "--no-progress", "-q"]
         subprocess.run(cmd, check=True)
         peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0

@@ -3,7 +3,7 @@
 Each *reading* changes one or two settings the paper leaves open or could be read otherwise
 (the filters' process-noise intensity and its units, the bearing noise of data and filter,
 the turn-rate prior of the constant-turn filters, process noise in the truth) and runs the
-five filters of :mod:`arrayproc.track.montecarlo` on the same measurements, printing the %
+five filters of :mod:`arrayproc.evaluate.montecarlo` on the same measurements, printing the %
 of lost tracks (final range error > 1 km) and the final position RMSE of the kept runs. The
 results behind docs/validation.md ("Tracking I", readings 10-13) are in
 docs/results/lr_case1_readings.jsonl.
@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from arrayproc.track import montecarlo as mc
+from arrayproc.evaluate import montecarlo as mc
 from arrayproc.track.filters import make_filter
 from arrayproc.track.init import TrackPrior
 from arrayproc.track.models import Q1_PAPER, Q2_PAPER, make_model

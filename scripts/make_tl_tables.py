@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from arrayproc.track.tl.bellhop import BellhopEnv, run_bellhop
-from arrayproc.track.tl.ram import RamEnv, ram_convergence, run_ram, run_ram_band
-from arrayproc.track.tl.table import TLTable
+from arrayproc.acoustics.tl.bellhop import BellhopEnv, run_bellhop
+from arrayproc.acoustics.tl.ram import RamEnv, ram_convergence, run_ram, run_ram_band
+from arrayproc.acoustics.tl.table import TLTable
 
 RCV = 300.0
 SRC = 5.0

@@ -20,8 +20,8 @@ from collections import defaultdict
 import numpy as np
 from bench_cbf import BAND, BEAMS, HOP, NFFT, time_stage
 
-from arrayproc.kernels import beamform as kb
-from arrayproc.stages.cbf import CBF
+from arrayproc.stages.beamform import _kernels as kb
+from arrayproc.stages.beamform.cbf import CBF
 
 STEPS = ("window", "fft", "pack", "corner turn", "gemm", "unpack")
 

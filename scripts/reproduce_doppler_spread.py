@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from arrayproc import waveforms as wf
+from arrayproc.acoustics import waveforms as wf
 
 FS = 5120.0
 C = 1500.0

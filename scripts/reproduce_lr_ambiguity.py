@@ -9,7 +9,7 @@ the target side known (one filter on the true bearing) and with the side resolve
 on the bearing pair, eqs. (9)-(13)), on the same noise. Prints a table beside the paper's and
 writes, per case and filter, ``track_loss_pct_known_side``, ``track_loss_pct_resolved``,
 ``rmse_pos_final_m``, ``rmse_vel_final_mps``, ``true_side_pct``, ``relative_time`` (and more).
-Geometry and priors: see :mod:`arrayproc.track.montecarlo` (target starts at [5000, 800] m).
+Geometry and priors: see :mod:`arrayproc.evaluate.montecarlo` (target starts at [5000, 800] m).
 """
 
 from __future__ import annotations
@@ -23,11 +23,11 @@ import time
 
 import numpy as np
 
+from arrayproc.evaluate.montecarlo import LRScenario, pcrb_case1, run_case, warm_up
 from arrayproc.track.filters import make_filter
 from arrayproc.track.init import init_from_bearing
 from arrayproc.track.lr import LRResolver
 from arrayproc.track.models import make_model
-from arrayproc.track.montecarlo import LRScenario, pcrb_case1, run_case, warm_up
 
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 # L-R paper table I: track loss % (known side, resolved) and relative execution time.

@@ -39,8 +39,8 @@ from arrayproc.chain import RunContext
 from arrayproc.io.recording import Recording
 from arrayproc.sim.run import simulate
 from arrayproc.sim.scenario import parse_scenario
-from arrayproc.stages.ibf import IBF
-from arrayproc.stages.synthetic import ETAM, PSAS
+from arrayproc.stages.beamform.etam import ETAM, PSAS
+from arrayproc.stages.beamform.ibf import IBF
 
 N_H, DX, C, FS, F_T = 64, 0.36, 1500.0, 1024.0, 250.0
 LAM = C / F_T

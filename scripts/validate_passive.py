@@ -99,9 +99,9 @@ def array_gain_db() -> float:
 def gamma_ks(n_b: int) -> float:
     from scipy import stats
 
-    from arrayproc.block import Block
-    from arrayproc.stages.cbf import CBF
-    from arrayproc.stages.integrate import Integrate
+    from arrayproc.chain.block import Block
+    from arrayproc.stages.beamform.cbf import CBF
+    from arrayproc.stages.passive.integrate import Integrate
     rng = np.random.default_rng(2024 + n_b)
     fs, nfft, n_h, sigma = 1024.0, 256, 16, 0.7
     pos = tc.line_array(n_h, 0.75)
@@ -119,7 +119,7 @@ def gamma_ks(n_b: int) -> float:
 def dft_filter_figures() -> dict:
     from scipy import signal
 
-    from arrayproc.stages.dft_filter import DFTFilter
+    from arrayproc.stages.condition.dft_filter import DFTFilter
     fs = 5120.0
     out = {}
     for band, alpha in (((100.0, 2000.0), 0.1), ((0.0, 800.0), 0.2)):

@@ -8,6 +8,9 @@ import numpy as np
 import pytest
 
 from arrayproc.io.recording import RecordingWriter
+from arrayproc.stages import load_all
+
+load_all()  # register every stage type for chains built in the tests
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

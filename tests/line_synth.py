@@ -8,8 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from arrayproc.io.geometry import line_array
-
-from .conftest import write_recording
+from tests.conftest import write_recording
 
 
 def towed_tonals(path: Path, fs: float, duration: float, speed: float,

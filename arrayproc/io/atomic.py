@@ -9,7 +9,7 @@ from typing import Any
 
 import h5py
 
-from ..errors import FormatError
+from arrayproc.errors import FormatError
 
 
 def temporary_sibling(target: str | os.PathLike) -> Path:

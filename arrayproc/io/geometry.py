@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FormatError
+from arrayproc.errors import FormatError
 
 
 def line_array(n: int, spacing: float) -> np.ndarray:

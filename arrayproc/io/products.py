@@ -14,10 +14,10 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .. import __version__
-from ..errors import FormatError
-from .atomic import AtomicH5Writer
-from .recording import open_h5
+from arrayproc import __version__
+from arrayproc.errors import FormatError
+from arrayproc.io.atomic import AtomicH5Writer
+from arrayproc.io.recording import open_h5
 
 FORMAT = "arrayproc.products"
 FORMAT_VERSION = 1

@@ -15,11 +15,11 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..block import Block, Pose
-from ..errors import FormatError
-from .atomic import AtomicH5Writer
-from .geometry import body_to_world
-from .nav import Nav
+from arrayproc.chain.block import Block, Pose
+from arrayproc.errors import FormatError
+from arrayproc.geo.nav import Nav
+from arrayproc.io.atomic import AtomicH5Writer
+from arrayproc.io.geometry import body_to_world
 
 FORMAT = "arrayproc.recording"
 FORMAT_VERSION = 1

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FormatError
-from .recording import RecordingWriter
+from arrayproc.errors import FormatError
+from arrayproc.io.recording import RecordingWriter
 
 _PCM, _FLOAT, _EXTENSIBLE = 1, 3, 0xFFFE
 

@@ -33,7 +33,7 @@ def _load() -> None:
 
 def plot_file(path: str, out_png: str, kind: str, **options: Any) -> None:
     """Draw product ``kind`` of the file at ``path`` into ``out_png``."""
-    from ..errors import ArrayprocError
+    from arrayproc.errors import ArrayprocError
     _load()
     if kind not in PLOTTERS:
         raise ArrayprocError(f"plot: unknown kind {kind!r} (known: {', '.join(sorted(PLOTTERS))})")

@@ -7,12 +7,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ArrayprocError, FormatError
+from arrayproc.errors import ArrayprocError, FormatError
 
 
 def find_group(path: str, kind: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """The first products group of ``kind`` and the root attributes."""
-    from ..io.products import read_products
+    from arrayproc.io.products import read_products
     groups = read_products(path)
     root = groups.pop("/")
     for g in groups.values():
@@ -39,7 +39,7 @@ def open_truth_recording(root: dict[str, Any]):
     src = src.decode() if isinstance(src, bytes) else str(src)
     if not src or not Path(src).is_file():
         return None
-    from ..io.recording import Recording
+    from arrayproc.io.recording import Recording
     try:
         rec = Recording(src)
     except FormatError:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import register_plot
-from ._passive import find_group, open_truth_recording, robust_top
+from arrayproc.plots import register_plot
+from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
 
 
 @register_plot("btr")
@@ -41,7 +41,7 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
         cb.set_label(f"beam power Σ|Y|², dB re 1 µPa², unnormalised ({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth and elev is None else None
     if rec is not None:
-        from ..passive_truth import cone_angles
+        from arrayproc.io.truth import cone_angles
         with rec:
             for i, (name, c) in enumerate(cone_angles(rec, t).items()):
                 ax.plot(c, t, ls=":", lw=1.2, alpha=0.8, color=f"C{(i + 1) % 10}",

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import register_plot
-from ._passive import find_group, open_truth_recording, robust_top
+from arrayproc.plots import register_plot
+from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
 
 #: Truth tonals are drawn while their source lies within this many degrees of the beam.
 TRUTH_GATE_DEG = 10.0
@@ -55,7 +55,7 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                   else "power Σ|Y|², dB re 1 µPa², unnormalised") + f" ({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth else None
     if rec is not None:
-        from ..passive_truth import cone_angles, tonal_frequencies
+        from arrayproc.io.truth import cone_angles, tonal_frequencies
         with rec:
             cones = cone_angles(rec, t)
             first = True

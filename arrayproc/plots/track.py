@@ -14,8 +14,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Ellipse
 
-from ..errors import FormatError
-from . import register_plot
+from arrayproc.errors import FormatError
+from arrayproc.plots import register_plot
 
 FILTER_STYLE = {"ekf": "tab:red", "ukf": "tab:blue", "ckf": "tab:green", "ghf": "tab:orange",
                 "srf": "tab:purple", "rpf": "tab:brown"}
@@ -52,7 +52,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int = 5,
     """Plan view of a tracks file: ownship, each track's estimate with 2σ position ellipses every
     ``ellipse_every`` points, and the truth (from ``truth`` {name: (n, 2) m} or the recording's
     ``/truth/sources`` when the tracks file names it)."""
-    from ..io.products import read_products
+    from arrayproc.io.products import read_products
 
     prod = read_products(tracks_path)
     groups = [g for n, g in prod.items() if n != "/" and g.get("kind") == "tracks"]

@@ -2,7 +2,7 @@
 static clutter, and the direct blast.
 
 Geometry is exact (two retarded-time legs per sample and element, see
-``arrayproc.kernels.propagate.echo_accumulate``), so an echo from a target at range rate ṙ
+``arrayproc.sim._propagate_kernels.echo_accumulate``), so an echo from a target at range rate ṙ
 is time-scaled by d = (c − ṙ)/(c + ṙ) (thesis eq. (4.8)) without any Doppler being added by
 hand. Echo amplitude: A · 10^(TS/20) · g(r1) · g(r2) with A the pulse's peak amplitude at 1 m
 (SL = RMS level of the carrier, dB re 1 µPa @ 1 m), TS the target strength (dB re 1 m²
@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels.fracdelay import HALF_WIDTH, default_table
-from ..kernels.propagate import echo_accumulate
-from .motion import BodyOffsetMover, FixedMover, TrackMover
-from .propagation import LossLaw, Pose, forward_time, grid_nodes, retarded_time
-from .scenario import ActiveSpec
-from .sources import tonal_amplitude
+from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
+from arrayproc.sim._propagate_kernels import echo_accumulate
+from arrayproc.sim.motion import BodyOffsetMover, FixedMover, TrackMover
+from arrayproc.sim.propagation import LossLaw, Pose, forward_time, grid_nodes, retarded_time
+from arrayproc.sim.scenario import ActiveSpec
+from arrayproc.sim.sources import tonal_amplitude
 
 KEY_CLUTTER = 31
 

@@ -1,5 +1,5 @@
 """Exact 3-D kinematics of everything that moves in a scenario: positions, velocities and
-accelerations at arbitrary times, from :class:`arrayproc.kinematics.Trajectory`.
+accelerations at arbitrary times, from :class:`arrayproc.geo.kinematics.Trajectory`.
 
 World frame x east, y north, z down (m). Every mover exposes ``state3(t) -> (pos, vel, acc)``,
 each of shape (n, 3), evaluated in closed form (straight legs and constant-rate turns), also
@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels.simtraj import evaluate
-from ..kinematics import Trajectory
+from arrayproc.geo.kinematics import Trajectory
+from arrayproc.sim._motion_kernels import evaluate
 
 
 def segment_table(traj: Trajectory) -> tuple[np.ndarray, ...]:
-    """(tb, p0, c0, v, w) of a trajectory for :func:`arrayproc.kernels.simtraj.evaluate`:
+    """(tb, p0, c0, v, w) of a trajectory for :func:`arrayproc.sim._motion_kernels.evaluate`:
     each segment's start time, position, course (after any instant jump), speed, turn rate,
     plus a final holding row (straight on at the last speed)."""
     segs = traj.segments

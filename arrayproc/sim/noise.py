@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scenario import NoiseSpec
-from .signals import ShapedNoise, level_to_psd
+from arrayproc.sim.scenario import NoiseSpec
+from arrayproc.sim.signals import ShapedNoise, level_to_psd
 
 KEY_NOISE = 21
 

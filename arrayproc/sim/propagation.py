@@ -1,5 +1,5 @@
 """Propagation set-up: the array's pose per sample, exact reference retarded times and the
-transmission-loss laws handed to the numba kernels (``arrayproc.kernels.propagate``).
+transmission-loss laws handed to the numba kernels (``arrayproc.sim._propagate_kernels``).
 
 Retarded time at the array reference point (thesis eq. (2.47), exact): τ solves
 c·τ = |x_R(t) − x_S(t − τ)|, found by fixed-point iteration (contraction |v_S|/c < 0.01), to
@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..track.tl.table import TLTable
-from .scenario import Propagation
+from arrayproc.acoustics.tl.table import TLTable
+from arrayproc.sim.scenario import Propagation
 
 N_ITER = 10  # fixed (never data-dependent, so results do not depend on chunking)
 GRID = 32  # samples between exact reference retarded times

@@ -12,16 +12,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..io.recording import RecordingWriter
-from ..kernels.fracdelay import HALF_WIDTH, OVERSAMPLING, default_table
-from ..kernels.propagate import oneway_accumulate
-from .active import ActiveSim, PingTrain
-from .motion import BodyOffsetMover, TrackMover
-from .noise import ambient_noise
-from .propagation import LossLaw, Pose, grid_nodes, retarded_time
-from .scenario import Scenario, load_scenario
-from .sources import SourceSignal
+from arrayproc.dsp.fracdelay import HALF_WIDTH, OVERSAMPLING, default_table
+from arrayproc.errors import ConfigError
+from arrayproc.io.recording import RecordingWriter
+from arrayproc.sim._propagate_kernels import oneway_accumulate
+from arrayproc.sim.active import ActiveSim, PingTrain
+from arrayproc.sim.motion import BodyOffsetMover, TrackMover
+from arrayproc.sim.noise import ambient_noise
+from arrayproc.sim.propagation import LossLaw, Pose, grid_nodes, retarded_time
+from arrayproc.sim.scenario import Scenario, load_scenario
+from arrayproc.sim.sources import SourceSignal
 
 KEY_POSITION_ERROR = 41
 KEY_LATERAL = 42

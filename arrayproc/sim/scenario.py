@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..io.geometry import line_array
-from ..kernels.fracdelay import PASSBAND
-from ..kinematics import KNOT, Trajectory
+from arrayproc.dsp.fracdelay import PASSBAND
+from arrayproc.errors import ConfigError
+from arrayproc.geo.kinematics import KNOT, Trajectory
+from arrayproc.io.geometry import line_array
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -287,7 +287,7 @@ class ClutterSpec:
 
 @dataclass
 class ActiveSpec:
-    waveform: Any  # arrayproc.waveforms.Waveform
+    waveform: Any  # arrayproc.acoustics.waveforms.Waveform
     level_db: float
     interval: float
     first: float
@@ -494,7 +494,7 @@ def parse_scenario(data: dict, file: str = "<scenario>",
 
 
 def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
-    from .. import waveforms as wf
+    from arrayproc.acoustics import waveforms as wf
 
     kind = t.str_("waveform", required=True, choices=("bpsk", "hfm", "cw"))
     dur = t.num("duration", required=True, positive=True)

@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .. import fft
+from arrayproc.dsp import fft
 
 UPA2 = 1e-12  # (1 µPa)² in Pa²
 FRAME = 8192

@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .motion import TrackMover
-from .scenario import SPEED_MODEL_REF, Broadband, SourceSpec
-from .signals import UPA2, ShapedNoise
+from arrayproc.sim.motion import TrackMover
+from arrayproc.sim.scenario import SPEED_MODEL_REF, Broadband, SourceSpec
+from arrayproc.sim.signals import UPA2, ShapedNoise
 
 KEY_TONAL = 11
 KEY_BROADBAND = 12

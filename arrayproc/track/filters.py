@@ -10,7 +10,7 @@ Rayleigh, Clark, Vinter & Yaqoob 2007) all hold a relative state ``x`` and covar
 - ``update(bearing_deg) -> float`` — bearing update (eq. (7)), returns the log-likelihood of the
   measurement used by the L-R weights (eq. (9), or section IV's likelihood for the SRF).
 
-The numerical work is done by the numba kernels of :mod:`arrayproc.kernels.track_core`, which
+The numerical work is done by the numba kernels of :mod:`arrayproc.track._kernels`, which
 the Monte Carlo engine also calls, so the class and the vectorised runs are the same code.
 Covariances are symmetrised after every step; a non-positive-definite covariance is repaired
 with a diagonal jitter and counted in ``n_repairs``; a non-finite state raises
@@ -27,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..kernels import track_core as kc
-from .models import MotionModel
-from .points import cubature_points, gauss_hermite_points, unscented_points
+from arrayproc.errors import ConfigError
+from arrayproc.track import _kernels as kc
+from arrayproc.track.models import MotionModel
+from arrayproc.track.points import cubature_points, gauss_hermite_points, unscented_points
 
 
 class FilterDivergence(ArithmeticError):
@@ -159,6 +159,6 @@ def make_filter(name: str, model: MotionModel, sigma_deg: float = 1.5,
 
 
 # Issue 7: the regularized particle filter (bearings only) through the same step interface.
-from .pf import RPFTracker  # noqa: E402
+from arrayproc.track.pf import RPFTracker  # noqa: E402
 
 FILTERS["rpf"] = RPFTracker  # type: ignore[assignment]

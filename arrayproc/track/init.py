@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import track_core as kc
-from ..kinematics import KNOT
+from arrayproc.geo.kinematics import KNOT
+from arrayproc.track import _kernels as kc
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .filters import FilterDivergence
+from arrayproc.track.filters import FilterDivergence
 
 
 class LRResolver:

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..kernels import track_core as kc
-from ..kinematics import wrap_pi
+from arrayproc.errors import ConfigError
+from arrayproc.geo.kinematics import wrap_pi
+from arrayproc.track import _kernels as kc
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ constant-velocity model (eqs. (4)-(6), (17)), weights from the bearing and level
 (eqs. (18)-(19), (31)-(33)), regularization-resampling when N_eff (eq. (20)) < N_thr·N with
 the Epanechnikov kernel and the MISE-optimal bandwidth (eqs. (21)-(28)), estimate and
 covariance after that step (eqs. (29)-(30)). Bearings-only tracking is the same filter with
-the level term switched off. The per-particle work is in :mod:`arrayproc.kernels.pf`.
+the level term switched off. The per-particle work is in :mod:`arrayproc.track._pf_kernels`.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..kernels import pf as kpf
-from ..kinematics import KNOT
-from .spl import ROSS_SURFACE_SHIP, SourceLevelModel
-from .tl.table import TLTable
+from arrayproc.acoustics.source_level import ROSS_SURFACE_SHIP, SourceLevelModel
+from arrayproc.acoustics.tl.table import TLTable
+from arrayproc.errors import ConfigError
+from arrayproc.geo.kinematics import KNOT
+from arrayproc.track import _pf_kernels as kpf
 
 __all__ = ["RPFConfig", "RPFResult", "RegularizedParticleFilter", "RPFTracker", "run_seeds"]
 
@@ -191,7 +191,7 @@ class RPFTracker:
         self.tl = (0.0, 1.0, np.zeros(2))
         self.has_tl = tl_table is not None
         if self.has_tl:
-            from .tl.table import default_table_path
+            from arrayproc.acoustics.tl.table import default_table_path
 
             path = tl_table if ("/" in tl_table or tl_table.endswith(".h5")) else \
                 default_table_path(tl_table)
@@ -231,7 +231,7 @@ class RPFTracker:
         self._pending = (float(T), np.asarray(own_prev, float), np.asarray(own_next, float))
 
     def update(self, bearing_deg: float, level_db: float | None = None) -> float:
-        from .filters import FilterDivergence
+        from arrayproc.track.filters import FilterDivergence
 
         use_level = level_db is not None and math.isfinite(level_db)
         if use_level and not self.has_tl:

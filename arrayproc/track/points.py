@@ -11,7 +11,7 @@ import itertools
 import numpy as np
 from numpy.polynomial.hermite_e import hermegauss
 
-from ..errors import ConfigError
+from arrayproc.errors import ConfigError
 
 
 def unscented_points(n: int, alpha: float = 1.0, beta: float = 0.0,

@@ -47,12 +47,12 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..errors import ConfigError, FormatError
-from ..kernels import track_core as kc
-from .filters import FILTERS, FilterDivergence, make_filter
-from .init import TrackPrior, init_from_bearing
-from .lr import LRResolver
-from .models import Q1_PAPER, Q2_PAPER, make_model
+from arrayproc.errors import ConfigError, FormatError
+from arrayproc.track import _kernels as kc
+from arrayproc.track.filters import FILTERS, FilterDivergence, make_filter
+from arrayproc.track.init import TrackPrior, init_from_bearing
+from arrayproc.track.lr import LRResolver
+from arrayproc.track.models import Q1_PAPER, Q2_PAPER, make_model
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -307,7 +307,7 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
 def run_tracker(products_path: str, config_path: str, out_path: str,
                 progress: bool = False) -> None:
     """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5`` (see the module doc)."""
-    from ..io.products import ProductsWriter, read_products
+    from arrayproc.io.products import ProductsWriter, read_products
 
     cfg = load_tracker_config(config_path)
     if not os.path.exists(products_path):

@@ -1,0 +1,77 @@
+"""The public API behind ``import arrayproc``: chains built with every stage type registered,
+recordings and products opened in one call.
+
+The engine (:mod:`arrayproc.chain`) knows no stage by name; this layer loads the stage modules
+(:func:`arrayproc.stages.load_all`) before any chain is built.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from arrayproc import chain as _chain
+from arrayproc.stages import load_all as _load_all
+
+
+def build_chain(config: Mapping[str, Any] | str, text: str = "") -> _chain.ChainSpec:
+    """Build and validate a chain from a parsed TOML mapping or TOML text.
+
+    Parameters
+    ----------
+    config : mapping or str
+        The chain (``[input]`` and ``[[stage]]`` tables) or its TOML text.
+    text : str
+        The TOML text, kept in the products file for provenance.
+
+    Returns
+    -------
+    ChainSpec
+        The stages, validated before any data is read.
+    """
+    _load_all()
+    return _chain.build_chain(config, text)
+
+
+def load_chain(path: str) -> _chain.ChainSpec:
+    """Read and validate a chain TOML file (see :func:`build_chain`).
+
+    Parameters
+    ----------
+    path : str
+        Chain file.
+
+    Returns
+    -------
+    ChainSpec
+    """
+    _load_all()
+    return _chain.load_chain(path)
+
+
+def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
+              t_start: float | None = None, t_stop: float | None = None,
+              progress: bool = False, log: Callable[[str], None] | None = None) -> int:
+    """Run a chain over a recording (see :func:`arrayproc.chain.run_chain`).
+
+    Parameters
+    ----------
+    recording : Recording
+        The open recording.
+    spec : ChainSpec
+        A chain from :func:`load_chain` or :func:`build_chain`.
+    products : ProductsWriter, optional
+        Where the stages write their products.
+    t_start, t_stop : float, optional
+        Segment to process, s since the recording start.
+    progress : bool
+        Show a progress bar on stderr.
+    log : callable, optional
+        Where stages send warnings (default: stderr).
+
+    Returns
+    -------
+    int
+        Number of time blocks read.
+    """
+    return _chain.run_chain(recording, spec, products, t_start, t_stop, progress, log)

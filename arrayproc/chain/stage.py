@@ -1,0 +1,107 @@
+"""Stages: generator transforms over blocks, built from checked parameters, and the registry
+that maps a chain file's ``type`` to a stage class.
+
+The engine knows no stage by name: stage modules register themselves with :func:`register`
+when imported, and the application layer imports them (:func:`arrayproc.stages.load_all`).
+"""
+
+from __future__ import annotations
+
+import sys
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from arrayproc.chain.block import Block
+from arrayproc.config import Param
+from arrayproc.errors import ConfigError
+
+
+@dataclass
+class RunContext:
+    """What a stage may use besides its input blocks."""
+
+    products: Any = None  # ProductsWriter or None
+    sound_speed: float = 1500.0
+    recording: Any = None  # the Recording (metadata and truth), or None
+    log: Callable[[str], None] = field(default=lambda msg: print(msg, file=sys.stderr))
+
+
+class Stage(ABC):
+    """Base of all stages: a generator transform ``blocks -> blocks``.
+
+    Subclasses declare ``kind`` (the TOML ``type``), ``params`` (name -> :class:`Param`) and
+    implement :meth:`process`. Parameters arrive validated as attributes. A stage that writes
+    products asks ``self.products(kind)`` for its group writer.
+    """
+
+    kind: ClassVar[str] = ""
+    params: ClassVar[dict[str, Param]] = {}
+
+    def __init__(self, name: str | None = None, **values: Any) -> None:
+        self.name = name or self.kind
+        where = f"stage {self.name!r}"
+        for key in values:
+            if key not in self.params:
+                raise ConfigError(f"{where}: unknown key {key!r} for type {self.kind!r} "
+                                  f"(known: {', '.join(sorted(self.params)) or 'none'})")
+        for key, p in self.params.items():
+            if key in values:
+                setattr(self, key, p.convert(f"{where}: key {key!r}", values[key]))
+            elif p.required:
+                raise ConfigError(f"{where}: missing required key {key!r}")
+            else:
+                setattr(self, key, p.default)
+        self.ctx = RunContext()
+        self.validate()
+
+    def validate(self) -> None:  # noqa: B027 - optional hook, empty by default
+        """Cross-parameter checks; raise ConfigError naming the key."""
+
+    def bind(self, ctx: RunContext) -> None:
+        """Called once by the runner before data flows."""
+        self.ctx = ctx
+
+    def products(self, kind: str, **attrs: Any):
+        """The products group this stage writes to (named after the stage)."""
+        if self.ctx.products is None:
+            return None
+        return self.ctx.products.group(self.name, kind, self.name, **attrs)
+
+    #: The stage this one reads (None: the reader), and its input sample rate (Hz); both set
+    #: by :func:`build_chain` / :func:`run_chain` before data flows.
+    upstream: Stage | None = None
+    fs_in: float = 0.0
+
+    def warmup_seconds(self, fs: float) -> float:
+        """Input needed before this stage's output is valid (s), for segmented runs; ``fs`` is
+        the stage's input sample rate."""
+        return 0.0
+
+    def output_rate(self, fs: float) -> float:
+        """Sample rate (Hz) of the time series this stage passes on, given its input rate."""
+        return fs
+
+    def snapshot_seconds(self) -> float | None:
+        """Time between this stage's output snapshots (s), when it emits snapshots; by default
+        that of the stage it reads."""
+        return self.upstream.snapshot_seconds() if self.upstream is not None else None
+
+    @abstractmethod
+    def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        """The stage's generator transform (subclasses)."""
+
+    def __call__(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        return self.process(blocks)
+
+
+STAGES: dict[str, type[Stage]] = {}
+
+
+def register(cls: type[Stage]) -> type[Stage]:
+    """Class decorator: make a stage type available to chain files under ``cls.kind``."""
+    if not cls.kind:
+        raise TypeError(f"{cls.__name__} has no kind")
+    STAGES[cls.kind] = cls
+    return cls

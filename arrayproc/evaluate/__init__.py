@@ -1,0 +1,1 @@
+"""Evaluation: Monte Carlo drivers, the papers' scenarios, and metrics against truth."""

@@ -1,0 +1,124 @@
+"""Element spectra of successive snapshots, for the stages that work per hydrophone and bin
+(inverse beamforming, passive synthetic aperture, ETAM).
+
+A *spectra block* has domain ``("snapshot", "freq", "channel")``: complex64 DFTs (unnormalised,
+numpy sign convention) of ``nfft``-sample frames of every element, for the bins of a band.
+Its ``meta`` holds per-snapshot ``times`` (centre, s), ``starts`` (first sample), ``headings``
+(deg), ``positions_xy`` (reference point, m), plus ``nfft``, ``hop``, ``window`` and ``df``.
+
+Thesis ch. 2 works with uniform line arrays; :func:`uniform_line` checks the geometry and
+returns the element order and spacing those stages need.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import get_window
+
+from arrayproc.chain.block import Block
+from arrayproc.dsp import fft
+from arrayproc.dsp.framing import FrameBuffer
+from arrayproc.errors import ConfigError
+
+SPECTRA_DOMAIN = ("snapshot", "freq", "channel")
+
+
+def uniform_line(positions: np.ndarray, tol: float = 1e-3) -> tuple[np.ndarray, float]:
+    """Check that the elements form a uniform line along the body x axis.
+
+    Returns ``(order, spacing)``: channel indices from the forward end aft, and the element
+    spacing δx (m). Raises ConfigError otherwise.
+    """
+    p = np.asarray(positions, float)
+    if p.shape[0] < 2:
+        raise ConfigError("needs a line array of at least 2 elements")
+    if np.ptp(p[:, 1]) > tol or np.ptp(p[:, 2]) > tol:
+        raise ConfigError("needs a line array along the body x axis (y and z constant)")
+    order = np.argsort(-p[:, 0], kind="stable")
+    d = -np.diff(p[order, 0])
+    dx = float(np.mean(d))
+    if dx <= 0 or np.max(np.abs(d - dx)) > tol * max(dx, 1.0):
+        raise ConfigError("needs a uniformly spaced line array")
+    return order, dx
+
+
+def snapshot_seconds(rule: str, n_elements: int, spacing: float, speed: float) -> float:
+    """Snapshot duration T_B (s) from the tow speed U (m/s).
+
+    ``"psas"``: thesis eq. (2.32), T_B = N_H δx / U — successive apertures abut.
+    ``"etam"``: thesis eq. (2.52), T_B = (N_H − 1) δx / (2U) — successive apertures half overlap.
+    """
+    if not speed > 0:
+        raise ConfigError("the snapshot length follows from the tow speed, but the navigation "
+                          "shows a stationary array; give the snapshot length explicitly")
+    if rule == "psas":
+        return n_elements * spacing / speed
+    if rule == "etam":
+        return (n_elements - 1) * spacing / (2.0 * speed)
+    raise ConfigError(f"unknown snapshot rule {rule!r} (psas or etam)")
+
+
+def time_taper(name: str, nfft: int) -> np.ndarray:
+    """Periodic taper normalised to mean 1 (so a bin-centred tone keeps its DFT amplitude)."""
+    if name == "none":
+        return np.ones(nfft)
+    w = get_window(name, nfft, fftbins=True)
+    return w / w.mean()
+
+
+class SpectraFramer:
+    """Turns time blocks into spectra blocks: frames of ``nfft`` every ``hop``, taper, rfft,
+    band selection. Poses come from ``nav`` (a :class:`~arrayproc.geo.nav.Nav`) when given,
+    else from each block's pose."""
+
+    def __init__(self, nfft: int, hop: int, window: str = "none",
+                 band: tuple[float, float] | None = None, nav=None) -> None:
+        self.nfft, self.hop = int(nfft), int(hop)
+        self.window = window
+        self._taper = time_taper(window, self.nfft).astype(np.float32)
+        self.band = band
+        self.nav = nav
+        self._fb = FrameBuffer(self.nfft, self.hop)
+        self._bins: np.ndarray | None = None
+        self.index = 0
+
+    def _select(self, fs: float) -> np.ndarray:
+        if self._bins is None:
+            f = np.fft.rfftfreq(self.nfft, 1.0 / fs)
+            lo, hi = self.band if self.band is not None else (0.0, np.inf)
+            self._bins = np.flatnonzero((f >= lo) & (f <= hi))
+            if self._bins.size == 0:
+                raise ConfigError(f"band {self.band} holds no DFT bin (fs = {fs:g} Hz, "
+                                  f"nfft = {self.nfft})")
+            self.freqs = f[self._bins]
+        return self._bins
+
+    def push(self, b: Block) -> Block | None:
+        n_valid = b.meta.get("n_valid", b.data.shape[0])
+        frames, starts = self._fb.push(b.data[:n_valid],
+                                       int(b.meta.get("sample0", round(b.t0 * b.fs))))
+        if frames.shape[0] == 0:
+            return None
+        bins = self._select(b.fs)
+        # FFT along contiguous rows (channel-major), then back to (S, F, C) for the band only
+        rows = np.ascontiguousarray(frames.transpose(0, 2, 1), dtype=np.float32)
+        rows *= self._taper[None, None, :]
+        spec = fft.rfft(rows, axis=2)
+        x = np.ascontiguousarray(spec[:, :, bins[0]:bins[-1] + 1].transpose(0, 2, 1))
+        times = (starts + 0.5 * self.nfft) / b.fs
+        if self.nav is not None:
+            pos, hd, _, spd = self.nav.at(times)
+        else:
+            pose = b.pose
+            k = times.size
+            pos = np.repeat(pose.position[None], k, 0) if pose else np.zeros((k, 2))
+            hd = np.full(k, pose.heading if pose else 0.0)
+            spd = np.full(k, pose.speed if pose else 0.0)
+        out = Block(x.astype(np.complex64, copy=False), SPECTRA_DOMAIN, starts[0] / b.fs,
+                    (starts[-1] - starts[0] + self.nfft) / b.fs, b.fs, b.positions, b.pose,
+                    self.freqs, None, self.index,
+                    {"times": times, "starts": starts, "headings": hd, "positions_xy": pos,
+                     "speeds": spd, "nfft": self.nfft, "hop": self.hop, "window": self.window,
+                     "df": b.fs / self.nfft})
+        self.index += x.shape[0]
+        return out

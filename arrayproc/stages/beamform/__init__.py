@@ -1,0 +1,1 @@
+"""Beamforming stages: conventional (CBF), inverse beamforming, ETAM synthetic aperture."""

@@ -1,0 +1,1 @@
+"""Conditioning of the hydrophone time series before beamforming (DFT filter)."""

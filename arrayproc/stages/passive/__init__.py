@@ -1,0 +1,1 @@
+"""Passive displays and measurements from beams: integration, BTR, LOFAR, bearings, band power."""

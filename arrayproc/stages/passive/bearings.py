@@ -1,0 +1,165 @@
+"""``bearings``: bearing extraction by peak picking on the BTR and on LOFAR lines.
+
+Input: power blocks ``("snapshot", "freq", "beam")`` from ``integrate`` (cone-angle beams).
+Per integrated snapshot:
+
+- broadband (``broadband = true``): the beam power summed over ``band`` (a BTR row); its
+  robust noise level is the median over beams; every local maximum ``threshold_db`` or more
+  above it is a detection, strongest first, at least ``min_separation`` deg from a stronger
+  one, at most ``max_peaks``.
+- narrowband (``lines = true``): each beam's spectrum is divided by its TPSW background
+  (as in ``lofar``); a line is a frequency bin whose best beam stands ``line_threshold_db``
+  over the background and is a local maximum in frequency; at each line the beam row is
+  peak-picked like the BTR (noise = its median over beams), ignoring peaks more than
+  ``line_dynamic_db`` below the strongest one (the sidelobes of a line source: −13.3 dB for
+  an unshaded line array).
+
+Peaks are refined to sub-beam resolution by a parabola through the peak beam and its two
+neighbours (dB against cone angle). Rows (products ``bearings``, DESIGN section 4): ``time``
+(s), ``cone_deg``, ``bearing_port_deg = heading − cone`` and ``bearing_stbd_deg = heading +
+cone`` (deg true, the left-right pair; heading of the array at the snapshot), ``level_db`` (dB
+re ``ref``², the thesis's unnormalised beam-power sums), ``snr_db`` (over the noise estimate),
+``freq_lo``/``freq_hi`` (Hz: the band summed, or the line's bin edges), ``spl_db`` (the
+received level at a hydrophone of a plane wave from the peak's direction: the in-band mean
+square for broadband peaks, the tone's mean square for lines; dB re ``ref``², see
+:func:`received_level_offset_db`; noise in the beam adds to it at low SNR). Blocks pass on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from arrayproc.chain import Param, Stage, positive, register
+from arrayproc.chain.block import Block
+from arrayproc.dsp.peaks import pick_peaks
+from arrayproc.dsp.tpsw import tpsw
+from arrayproc.errors import ConfigError
+from arrayproc.stages.passive.btr import band_bins, snapshot_times
+from arrayproc.stages.passive.integrate import check_power_block
+
+COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
+           "freq_lo", "freq_hi", "spl_db")
+
+
+def received_level_offset_db(b: Block, broadband: bool) -> float:
+    """dB to subtract from a beam-power level (dB re 1 µPa², the thesis's unnormalised sums)
+    to get the received level at a hydrophone of a plane wave from the beam's direction.
+
+    Per CBF snapshot a tone of amplitude A on a bin gives |Y| = N_H·N_DFT·A/2 (window and
+    shading of mean 1), so its mean square A²/2 is 2|Y|²/(N_H²·N_DFT²); a broadband wave's
+    power per bin carries the window's mean square ⟨w²⟩ as well. Integration sums N_B
+    snapshots (unless ``mean``), a synthetic aperture adds N_S snapshots coherently (×N_S²).
+    """
+    m = b.meta
+    n_h = b.positions.shape[0]
+    nfft = float(m.get("nfft", 1))
+    n_b = 1 if m.get("integration_mean") else int(m.get("snapshots", 1))
+    n_s = int(m.get("synthetic", {}).get("snapshots", 1)) if isinstance(
+        m.get("synthetic"), dict) else 1
+    off = 10 * np.log10(n_b * (n_h * nfft * n_s) ** 2 / 2.0)
+    if broadband:
+        from arrayproc.stages.beamform.cbf import time_window
+        off += 10 * np.log10(np.mean(time_window(str(m.get("window", "none")), int(nfft)) ** 2))
+    return float(off)
+
+
+@register
+class Bearings(Stage):
+    """Peak picking on BTR rows and LOFAR lines (products ``bearings``); see module doc."""
+
+    kind = "bearings"
+    params = {
+        "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)"),
+        "broadband": Param("bool", True, "pick peaks on the broadband (BTR) beam power"),
+        "lines": Param("bool", False, "pick peaks on narrowband (LOFAR) lines"),
+        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB"),
+        "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB"),
+        "line_dynamic_db": Param("float", 10.0, "line peaks more than this below the line's "
+                                 "strongest peak are taken for its sidelobes, dB",
+                                 check=positive),
+        "min_separation": Param("float", 4.0, "minimum separation of peaks, deg",
+                                check=lambda v: None if v >= 0 else "must be >= 0"),
+        "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
+        "max_lines": Param("int", 16, "lines per snapshot", check=positive),
+        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
+        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
+        "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
+        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa)", check=positive),
+    }
+
+    def validate(self) -> None:
+        if not (self.broadband or self.lines):
+            raise ConfigError(f"stage {self.name!r}: key 'broadband' and key 'lines' are both "
+                              "false: nothing to detect")
+        if not 0 <= self.tpsw_gap < self.tpsw_window:
+            raise ConfigError(f"stage {self.name!r}: key 'tpsw_gap' must be in [0, "
+                              f"tpsw_window), got {self.tpsw_gap}")
+
+    def _rows(self, t: float, heading: float, level_db: np.ndarray, cone: np.ndarray,
+              thr_db: float, f_lo: float, f_hi: float, rows: dict[str, list],
+              dynamic_db: float = np.inf, offset_db: float = np.nan) -> None:
+        noise_db = float(np.median(level_db))
+        floor = max(noise_db + thr_db, float(level_db.max()) - dynamic_db)
+        for pos, lev, _ in pick_peaks(level_db, cone, floor, self.min_separation,
+                                      self.max_peaks):
+            rows["time"].append(t)
+            rows["cone_deg"].append(pos)
+            rows["bearing_port_deg"].append((heading - pos) % 360.0)
+            rows["bearing_stbd_deg"].append((heading + pos) % 360.0)
+            rows["level_db"].append(lev)
+            rows["snr_db"].append(lev - noise_db)
+            rows["freq_lo"].append(f_lo)
+            rows["freq_hi"].append(f_hi)
+            rows["spl_db"].append(lev - offset_db)
+
+    def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        out = None
+        idx = None
+        for b in blocks:
+            check_power_block(self, b)
+            cone = np.asarray(b.beams, float)
+            if cone.ndim != 1:
+                raise ConfigError(f"stage {self.name!r}: needs cone-angle beams "
+                                  "(beams = {start, stop, count})")
+            if idx is None:
+                idx = band_bins(b.freqs, self.band, f"stage {self.name!r}")
+                out = self.products("bearings")
+            times = snapshot_times(b)
+            heads = np.asarray(b.meta.get("headings", np.zeros(times.size)), float)
+            df = float(b.meta.get("df", np.median(np.diff(b.freqs)) if b.freqs.size > 1
+                                  else 0.0))
+            rows: dict[str, list] = {k: [] for k in COLUMNS}
+            lref = 10 * np.log10(self.ref**2)
+            off_bb = received_level_offset_db(b, broadband=True)
+            off_line = received_level_offset_db(b, broadband=False)
+            for s in range(b.data.shape[0]):
+                p = b.data[s]  # (F, B)
+                if self.broadband:
+                    bp = p[idx].sum(axis=0, dtype=np.float64)
+                    self._rows(times[s], heads[s], 10 * np.log10(np.maximum(bp, 1e-300)) - lref,
+                               cone, self.threshold_db, float(b.freqs[idx[0]]),
+                               float(b.freqs[idx[-1]]), rows, offset_db=off_bb)
+                if self.lines:
+                    self._lines(p, b.freqs, times[s], heads[s], cone, df, lref, rows, off_line)
+            if out is not None and rows["time"]:
+                out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
+            yield b
+
+    def _lines(self, p: np.ndarray, freqs: np.ndarray, t: float, heading: float,
+               cone: np.ndarray, df: float, lref: float, rows: dict[str, list],
+               offset_db: float = np.nan) -> None:
+        spec = np.ascontiguousarray(p.T, dtype=np.float64)  # (B, F)
+        bg = tpsw(spec, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
+        ratio_db = 10 * np.log10(np.maximum(spec, 1e-300) / np.maximum(bg, 1e-300))
+        best = ratio_db.max(axis=0)  # (F,)
+        left = np.r_[-np.inf, best[:-1]]
+        right = np.r_[best[1:], -np.inf]
+        cand = np.flatnonzero((best > left) & (best >= right) & (best >= self.line_threshold_db))
+        cand = cand[np.argsort(-best[cand], kind="stable")][: self.max_lines]
+        for fi in np.sort(cand):
+            row_db = 10 * np.log10(np.maximum(spec[:, fi], 1e-300)) - lref
+            self._rows(t, heading, row_db, cone, self.line_threshold_db,
+                       float(freqs[fi] - 0.5 * df), float(freqs[fi] + 0.5 * df), rows,
+                       self.line_dynamic_db, offset_db)

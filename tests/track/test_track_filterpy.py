@@ -1,0 +1,72 @@
+"""Our UKF against filterpy's UKF, step by step, on the L-R paper's Case I (issue 6)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from arrayproc.evaluate.montecarlo import LRScenario
+from arrayproc.geo.kinematics import wrap_pi
+from arrayproc.track.filters import UKF
+from arrayproc.track.init import init_from_bearing
+from arrayproc.track.models import (
+    bearing_residual,
+    bearing_sigma_mean,
+    constant_turn,
+    constant_velocity,
+)
+
+filterpy = pytest.importorskip("filterpy")
+from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter  # noqa: E402
+
+
+def _rel(a, b):
+    return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+@pytest.mark.parametrize("case", [1, 2])
+@pytest.mark.parametrize("alpha,beta,kappa", [(1.0, 0.0, None), (0.5, 2.0, 0.0)])
+def test_ukf_matches_filterpy_step_by_step(case, alpha, beta, kappa):
+    scn = LRScenario(case=case)
+    g = scn.geometry()
+    model = constant_velocity() if case == 1 else constant_turn()
+    n = model.dim
+    k_ = 3.0 - n if kappa is None else kappa
+    ours = UKF(model, scn.sigma_deg, alpha=alpha, beta=beta, kappa=kappa)
+    rng = np.random.default_rng(7)
+    theta = np.arctan2(g["rel"][:, 0], g["rel"][:, 1])
+    z = wrap_pi(theta + rng.standard_normal(theta.size) * math.radians(scn.sigma_deg))
+    x0, P0 = init_from_bearing(math.degrees(z[0]), g["own"][0], scn.prior, n)
+    ours.initialize(x0, P0)
+
+    pts = MerweScaledSigmaPoints(n, alpha=alpha, beta=beta, kappa=k_)
+
+    def fx(x, dt, o0, o1):
+        return model.transition(x, dt, o0, o1)
+
+    def hx(x):
+        return np.array([math.atan2(x[0], x[1])])
+
+    fp = UnscentedKalmanFilter(dim_x=n, dim_z=1, dt=scn.dt, hx=hx, fx=fx, points=pts,
+                               z_mean_fn=bearing_sigma_mean, residual_z=bearing_residual)
+    fp.x = x0.copy()
+    fp.P = P0.copy()
+    fp.R = np.array([[math.radians(scn.sigma_deg) ** 2]])
+    fp.Q = model.process_noise(scn.dt)
+    for k in range(1, theta.size):
+        ours.predict(scn.dt, g["own"][k - 1], g["own"][k])
+        fp.predict(o0=g["own"][k - 1], o1=g["own"][k])
+        assert _rel(ours.x, fp.x) < 1e-9
+        assert _rel(ours.P, fp.P) < 1e-9
+        ours.update(math.degrees(z[k]))
+        fp.update(np.array([z[k]]))
+        assert _rel(ours.x, fp.x) < 1e-9, k
+        assert _rel(ours.P, fp.P) < 1e-9, k
+        # elementwise on the diagonal (variances span 10 decades)
+        np.testing.assert_allclose(np.diag(ours.P), np.diag(fp.P), rtol=1e-9)
+        for blk in (slice(0, 2), slice(2, 4), slice(4, n)):
+            if fp.x[blk].size:
+                np.testing.assert_allclose(ours.x[blk], fp.x[blk], rtol=1e-9,
+                                           atol=1e-9 * np.abs(fp.x[blk]).max())

@@ -1,0 +1,149 @@
+"""Left-right resolution (L-R paper eqs. (9)-(13)) and the Monte Carlo engine (issue 6)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from arrayproc.evaluate.montecarlo import LRScenario, run_case
+from arrayproc.track import _kernels as kc
+from arrayproc.track.filters import make_filter
+from arrayproc.track.init import init_from_bearing
+from arrayproc.track.lr import LRResolver
+from arrayproc.track.models import make_model
+
+FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
+
+
+class _Const:
+    """A stand-in filter with fixed likelihoods, to check eqs. (10)-(13) by hand."""
+
+    def __init__(self, x, P, ll):
+        self.x, self.P, self.ll = np.asarray(x, float), np.asarray(P, float), ll
+
+    def predict(self, *a):
+        pass
+
+    def update(self, z):
+        return self.ll
+
+
+def test_weights_and_combination_eqs_10_to_13():
+    f1 = _Const([1.0, 2.0], np.eye(2), math.log(0.3))
+    f2 = _Const([3.0, -2.0], 2 * np.eye(2), math.log(0.1))
+    lr = LRResolver([f1, f2])
+    lr.step(1.0, None, None, [0.0, 0.0])
+    w1 = 0.3 * 0.5 / (0.3 * 0.5 + 0.1 * 0.5)  # eq. (10)
+    np.testing.assert_allclose(lr.weights, [w1, 1 - w1])
+    x, P = lr.estimate()
+    xr = w1 * f1.x + (1 - w1) * f2.x  # eq. (12)
+    d1, d2 = f1.x - xr, f2.x - xr
+    Pr = w1 * (f1.P + np.outer(d1, d1)) + (1 - w1) * (f2.P + np.outer(d2, d2))  # eq. (13)
+    np.testing.assert_allclose(x, xr)
+    np.testing.assert_allclose(P, Pr)
+    lr.step(1.0, None, None, [0.0, 0.0])  # recursion: ω_k ∝ p_k ω_{k−1}
+    w1b = 0.3 * w1 / (0.3 * w1 + 0.1 * (1 - w1))
+    np.testing.assert_allclose(lr.weights[0], w1b)
+
+
+@pytest.mark.parametrize("name", FILTERS)
+@pytest.mark.parametrize("case", [1, 2])
+def test_kernel_lr_run_equals_python_resolver(name, case):
+    """The vectorised kernel (:func:`run_track`) and the per-step classes + LRResolver agree."""
+    scn = LRScenario(case=case)
+    g = scn.geometry()
+    y1, y2, draws, _ = scn.measurements(1, 11)
+    model = make_model(scn.model_name)
+    filt = make_filter(name, model, scn.sigma_deg)
+    n = model.dim
+    K = g["times"].size
+    xs, Ps, ws = np.empty((K, n)), np.empty((K, n, n)), np.empty((K, 2))
+    kind, U, wm, wc, Up, wmp, wcp = filt.kernel_args()
+    zs = np.stack([y1[0], y2[0]], axis=1)
+    p = scn.prior.as_array()
+    st = kc.run_track(kind, model.code, 2, g["times"], zs, g["own"], filt.sigma, model.q1,
+                      model.q2, p, draws[0], U, wm, wc, Up, wmp, wcp, xs, Ps, ws)
+    assert st & 4 == 0
+
+    def fresh(z0):
+        f = make_filter(name, model, scn.sigma_deg)
+        x0, P0 = init_from_bearing(math.degrees(z0), g["own"][0], scn.prior, n)
+        c = z0 + math.pi + draws[0, 2]
+        x0[:4] = (draws[0, 0] * math.sin(z0), draws[0, 0] * math.cos(z0),
+                  draws[0, 1] * math.sin(c) - g["own"][0, 2],
+                  draws[0, 1] * math.cos(c) - g["own"][0, 3])
+        f.initialize(x0, P0)
+        return f
+
+    lr = LRResolver([fresh(y1[0, 0]), fresh(y2[0, 0])])
+    for k in range(1, K):
+        lr.step(g["times"][k] - g["times"][k - 1], g["own"][k - 1], g["own"][k],
+                [math.degrees(y1[0, k]), math.degrees(y2[0, k])])
+        x, P = lr.estimate()
+        np.testing.assert_allclose(ws[k], lr.weights, rtol=1e-7, atol=1e-12)
+        np.testing.assert_allclose(xs[k], x, rtol=1e-8, atol=1e-8 * np.abs(x).max())
+        np.testing.assert_allclose(Ps[k], P, rtol=1e-6, atol=1e-8 * np.abs(P).max())
+
+
+def test_ghost_dies_after_the_ownship_turn():
+    scn = LRScenario(case=1)
+    r = run_case(scn, "ukf", True, 64, 5)
+    ok = ~r.lost
+    assert ok.mean() > 0.9
+    # by the end, the true-side weight is ≈ 1 in nearly every run not lost
+    assert np.median(r.weights[ok, -1, 0]) > 0.999
+    assert r.true_side_pct >= 99.0
+
+
+def test_monte_carlo_is_reproducible_bytewise():
+    scn = LRScenario(case=2)
+    a = run_case(scn, "ckf", True, 40, 123)
+    b = run_case(scn, "ckf", True, 40, 123)
+    c = run_case(scn, "ckf", True, 40, 124)
+    d = run_case(scn, "ckf", True, 40, 123, threads=1)
+    e = run_case(scn, "ckf", True, 40, 123, threads=3)
+    assert a.est.tobytes() == b.est.tobytes() == d.est.tobytes() == e.est.tobytes()
+    assert a.weights.tobytes() == b.weights.tobytes()
+    assert a.est.tobytes() != c.est.tobytes()
+
+
+def test_vectorised_runs_equal_one_at_a_time():
+    scn = LRScenario(case=1)
+    meas = scn.measurements(6, 9)
+    full = run_case(scn, "ghf", True, 6, 9, meas=meas)
+    for r in (0, 5):
+        one = run_case(scn, "ghf", True, 1, 9, meas=tuple(m[r:r + 1] for m in meas))
+        np.testing.assert_array_equal(one.est[0], full.est[r])
+
+
+def test_reduced_table_resolved_matches_known_side():
+    """A 400-run version of table I: L-R resolution costs (almost) no track loss."""
+    for case in (1, 2):
+        scn = LRScenario(case=case)
+        meas = scn.measurements(400, 2024 + case)
+        for name in FILTERS:
+            kn = run_case(scn, name, False, 400, 0, meas=meas)
+            rs = run_case(scn, name, True, 400, 0, meas=meas)
+            assert abs(rs.track_loss_pct - kn.track_loss_pct) <= 1.0, (case, name)
+            assert rs.true_side_pct >= 99.0, (case, name)
+            assert np.all(np.isfinite(rs.rmse_pos))
+
+
+@pytest.mark.slow
+def test_table_I_criteria_20000_runs():
+    """Issue 6 acceptance criteria that this reproduction meets, at 20,000 runs per entry:
+    resolved within 0.5 point of known-side, true side ≥ 99 % of the runs not lost, the EKF
+    the worst filter in both cases."""
+    for case in (1, 2):
+        scn = LRScenario(case=case)
+        meas = scn.measurements(20000, 7 + case)
+        loss = {}
+        for name in FILTERS:
+            kn = run_case(scn, name, False, 20000, 0, meas=meas)
+            rs = run_case(scn, name, True, 20000, 0, meas=meas)
+            assert abs(rs.track_loss_pct - kn.track_loss_pct) <= 0.5, (case, name)
+            assert rs.true_side_pct >= 99.0, (case, name)
+            loss[name] = kn.track_loss_pct
+        assert max(loss, key=loss.get) == "ekf", (case, loss)
