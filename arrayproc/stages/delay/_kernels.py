@@ -1,0 +1,176 @@
+"""Numba kernels of the delay estimators (plain-numpy references in ``tests/stages/delay``).
+
+``refine_peaks`` evaluates the band-limited cross-correlation
+
+    r(τ) = Re Σ_k G_k exp(j 2π f_k τ),   f_k = f_0 + k Δf,
+
+exactly at any real lag τ (the trigonometric interpolation of the inverse DFT of thesis
+eq. (3.27), which Matlab's ``interpft`` approximates on a grid) and moves from an integer-lag
+peak to the maximum by Newton steps on r'(τ) = 0. The exponentials of the uniform frequency
+grid are advanced by a complex rotation, so one step costs a few multiply-adds per bin and no
+transcendental function. Written by hand: no maintained library evaluates a DFT at
+arbitrary points with its derivatives.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True, fastmath=False)
+def _corr_derivs(g_re, g_im, f0, df, tau):
+    """r(τ), r'(τ), r''(τ) of one row of the cross-spectrum (see module docstring)."""
+    w0 = 2.0 * math.pi * f0
+    dw = 2.0 * math.pi * df
+    c = math.cos(w0 * tau)
+    s = math.sin(w0 * tau)
+    dc = math.cos(dw * tau)
+    ds = math.sin(dw * tau)
+    r = 0.0
+    r1 = 0.0
+    r2 = 0.0
+    w = w0
+    for k in range(g_re.shape[0]):
+        a = g_re[k]
+        b = g_im[k]
+        re = a * c - b * s  # Re(G e^{jθ})
+        im = a * s + b * c  # Im(G e^{jθ})
+        r += re
+        r1 -= w * im
+        r2 -= w * w * re
+        # advance e^{jθ} by e^{j dw τ}
+        c, s = c * dc - s * ds, s * dc + c * ds
+        w += dw
+    return r, r1, r2
+
+
+@njit(cache=True, parallel=True)
+def refine_peaks(g_re, g_im, rows, f0, df, tau0, lo, hi, n_iter):
+    """Newton search for the maximum of r(τ) of each row, kept inside [lo, hi].
+
+    Parameters
+    ----------
+    g_re, g_im : (m_rows, n_bins) float64
+        Real and imaginary parts of the (weighted) cross-spectrum rows.
+    rows : (m,) int64
+        Row of ``g`` each search runs on (several searches may share a row).
+    f0, df : float
+        Frequency of the first bin and the bin spacing, Hz.
+    tau0 : (m,) float64
+        Starting lags (s), e.g. the integer-lag peak.
+    lo, hi : (m,) float64
+        Bounds of each row's search, s.
+    n_iter : int
+        Newton steps.
+
+    Returns
+    -------
+    tau, r, r2 : (m,) float64
+        Lag of the maximum (s), r there and r'' there.
+    """
+    m = tau0.shape[0]
+    tau = np.empty(m)
+    rv = np.empty(m)
+    r2v = np.empty(m)
+    for i in prange(m):
+        t = tau0[i]
+        row = rows[i]
+        r, r1, r2 = _corr_derivs(g_re[row], g_im[row], f0, df, t)
+        for _ in range(n_iter):
+            if r2 >= 0.0:
+                break
+            step = -r1 / r2
+            tn = min(max(t + step, lo[i]), hi[i])
+            rn, r1n, r2n = _corr_derivs(g_re[row], g_im[row], f0, df, tn)
+            if rn < r:  # a step that lowers the peak is refused
+                break
+            t, r, r1, r2 = tn, rn, r1n, r2n
+            if abs(step) < 1e-13:
+                break
+        tau[i] = t
+        rv[i] = r
+        r2v[i] = r2
+    return tau, rv, r2v
+
+
+@njit(cache=True, parallel=True)
+def corr_at(g_re, g_im, f0, df, tau):
+    """r(τ) and r''(τ) of each row at the given lags (s), as in :func:`refine_peaks`."""
+    m = g_re.shape[0]
+    rv = np.empty(m)
+    r2v = np.empty(m)
+    for i in prange(m):
+        r, r1, r2 = _corr_derivs(g_re[i], g_im[i], f0, df, tau[i])
+        rv[i] = r
+        r2v[i] = r2
+    return rv, r2v
+
+
+@njit(cache=True)
+def windowed_peaks(r, lo, hi, k, frac):
+    """The highest local maxima of each row of ``r`` within [lo[i], hi[i]].
+
+    A sample is a local maximum when no neighbour inside the window is higher (the window's
+    ends count when they pass that test). Of the ``k`` highest, those at least ``frac`` times
+    the highest (for a positive highest) are kept.
+
+    Parameters
+    ----------
+    r : (m, n_lags) float
+        Correlation rows on a lag axis.
+    lo, hi : (m,) int64
+        First and last allowed index of each row.
+    k : int
+        Most maxima per row.
+    frac : float
+        Relative height a kept maximum needs.
+
+    Returns
+    -------
+    idx : (m, k) int64
+        Indices, highest first; unused slots repeat the highest.
+    count : (m,) int64
+        Maxima kept per row (at least 1).
+    """
+    m = r.shape[0]
+    out = np.empty((m, k), np.int64)
+    count = np.empty(m, np.int64)
+    vals = np.empty(k)
+    for i in range(m):
+        n_found = 0
+        for j in range(lo[i], hi[i] + 1):
+            v = r[i, j]
+            if j > lo[i] and r[i, j - 1] > v:
+                continue
+            if j < hi[i] and r[i, j + 1] >= v:
+                continue
+            if n_found < k:
+                p = n_found
+                n_found += 1
+            elif v > vals[k - 1]:
+                p = k - 1
+            else:
+                continue
+            while p > 0 and vals[p - 1] < v:
+                vals[p] = vals[p - 1]
+                out[i, p] = out[i, p - 1]
+                p -= 1
+            vals[p] = v
+            out[i, p] = j
+        if n_found == 0:  # flat row: take the window's first sample
+            out[i, 0] = lo[i]
+            n_found = 1
+        elif vals[0] > 0:
+            c = 1
+            while c < n_found and vals[c] >= frac * vals[0]:
+                c += 1
+            n_found = c
+        else:
+            n_found = 1
+        count[i] = n_found
+        for q in range(n_found, k):
+            out[i, q] = out[i, 0]
+    return out, count
