@@ -1,0 +1,226 @@
+"""Bearings-only batch TMA: Farina's maximum-likelihood estimator, thesis section 3.3.1.
+
+State ``x = [x_T, y_T, ẋ_T, ẏ_T]`` at the window start (eq. (3.42)); the source moves at
+constant velocity over the batch (eq. (3.41), with the measurement times in place of
+``b T_B / N_B``); bearings ``h_b(x) = atan2(x_T + τ_b ẋ_T − x_o,b, y_T + τ_b ẏ_T − y_o,b)``
+clockwise from north (eq. (3.44)); Gaussian errors give the log-likelihood (3.45)-(3.46) whose
+maximum is the weighted least-squares minimum (3.47) of the wrapped residuals. As in the thesis
+the minimum is found by differential evolution (then polished by least squares, see
+:mod:`.result`), and outliers are removed first from the residues of a polynomial fitted to the
+bearing sequence (the thesis's simplification of Farina's two-step rejection).
+
+A line array measures a cone angle: the bearing is ``heading − θ`` (port) or ``heading + θ``
+(starboard) (DESIGN section 3). :func:`solve_line_bearings` with ``side="auto"`` solves both
+mirror hypotheses and keeps the cheaper, reporting both costs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels import bo_cost_population
+from .fim import bo_fim, bo_jacobian
+from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
+
+__all__ = ["reject_outliers", "bearing_model", "solve_bearings", "solve_line_bearings"]
+
+SIDES = ("port", "starboard", "auto")
+
+
+def reject_outliers(times: np.ndarray, values: np.ndarray, sigma: float | None = None,
+                    degree: int = 5, k: float = 4.0, n_iter: int = 3) -> np.ndarray:
+    """Outliers of a smooth sequence from the residues of a polynomial fit (thesis 3.3.1).
+
+    A polynomial of ``degree`` (least squares, ``numpy.polynomial.Polynomial.fit``) is fitted
+    to the kept samples; a sample is rejected when its residue exceeds ``k`` times the larger
+    of ``sigma`` and the robust residue scale (1.4826 × median absolute residue); repeated
+    ``n_iter`` times.
+
+    Parameters
+    ----------
+    times : (B,) array_like
+        Sample times (s).
+    values : (B,) array_like
+        Samples (e.g. unwrapped bearings, rad).
+    sigma : float, optional
+        Expected noise standard deviation (same unit as ``values``).
+    degree, k, n_iter : int, float, int
+        Fit degree, rejection threshold in standard deviations, passes.
+
+    Returns
+    -------
+    (B,) bool ndarray
+        True for the samples kept.
+    """
+    t = np.asarray(times, float)
+    v = np.asarray(values, float)
+    keep = np.isfinite(v) & np.isfinite(t)
+    deg = int(min(degree, max(keep.sum() - 2, 0)))
+    for _ in range(n_iter):
+        if keep.sum() <= deg + 2:
+            break
+        poly = np.polynomial.Polynomial.fit(t[keep], v[keep], deg)
+        res = v - poly(t)
+        scale = 1.4826 * np.median(np.abs(res[keep]))
+        thr = k * max(scale, sigma or 0.0)
+        new = keep & (np.abs(res) <= thr) if thr > 0 else keep
+        if np.array_equal(new, keep):
+            break
+        keep = new
+    return keep
+
+
+def bearing_model(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.ndarray:
+    """Bearings ``h_b(x)`` (rad, clockwise from north) of thesis eq. (3.44).
+
+    Parameters
+    ----------
+    state : (4,) array_like
+        [x, y, vx, vy] at the window start (m, m/s).
+    tau : (B,) array_like
+        Times since the window start (s).
+    obs : (B, 2) array_like
+        Observer positions (m).
+
+    Returns
+    -------
+    (B,) ndarray
+    """
+    x = np.asarray(state, float)
+    d = x[None, :2] + np.asarray(tau, float)[:, None] * x[None, 2:] - np.asarray(obs, float)
+    return np.arctan2(d[:, 0], d[:, 1])
+
+
+def _observer_at(t: np.ndarray, obs: np.ndarray, at: float) -> np.ndarray:
+    """Observer position at time ``at``, linearly interpolated (held outside)."""
+    return np.array([np.interp(at, t, obs[:, 0]), np.interp(at, t, obs[:, 1])])
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.ndarray,
+                   sigma_rad: float | None = None, *, t0: float | None = None,
+                   t1: float | None = None, min_range_m: float = 50.0,
+                   max_range_m: float = 20000.0, seed: int | np.random.Generator = 0,
+                   outliers: bool = True, poly_degree: int = 5, outlier_k: float = 4.0,
+                   popsize: int = 20, maxiter: int = 400) -> TmaSolution:
+    """Maximum-likelihood bearings-only TMA (thesis eqs. (3.41)-(3.47)) with its CRLB (3.53).
+
+    Parameters
+    ----------
+    times : (B,) array_like
+        Bearing times (s).
+    bearings_rad : (B,) array_like
+        Measured bearings, rad clockwise from north.
+    observer_xy : (B, 2) array_like
+        Observer (array phase centre) positions at the bearing times (m).
+    sigma_rad : float, optional
+        Bearing standard deviation (rad); estimated from the residuals when None.
+    t0, t1 : float, optional
+        Window start (the state's time) and end (s); default the first and last time.
+    min_range_m, max_range_m : float
+        Range interval of the global search at the window's start and end (m).
+    seed : int or Generator
+        Seed of the differential evolution.
+    outliers : bool
+        Reject outliers from a polynomial fit first.
+    poly_degree, outlier_k : int, float
+        Polynomial degree and threshold (in σ) of the rejection.
+    popsize, maxiter : int
+        Differential-evolution settings.
+
+    Returns
+    -------
+    TmaSolution
+        ``method = "bearings"``; ``fitted`` holds the model bearings (rad) of the kept samples.
+    """
+    t = np.asarray(times, float).reshape(-1)
+    y = np.asarray(bearings_rad, float).reshape(-1)
+    obs = np.asarray(observer_xy, float).reshape(t.size, 2)
+    t0 = float(t[0] if t0 is None else t0)
+    t1 = float(t[-1] if t1 is None else t1)
+    keep = (reject_outliers(t, np.unwrap(y), sigma_rad, poly_degree, outlier_k) if outliers
+            else np.isfinite(y))
+    t, y, obs, n_rej = t[keep], y[keep], obs[keep], int((~keep).sum())
+    if t.size < 5:
+        raise ValueError(f"bearings-only TMA needs at least 5 bearings, {t.size} left")
+    tau = t - t0
+    o0 = _observer_at(t, obs, t0)
+    o1 = _observer_at(t, obs, t1)
+    w = np.full(t.size, 1.0 / (sigma_rad if sigma_rad else 1.0))
+
+    def res(x: np.ndarray) -> np.ndarray:
+        return w * _wrap(y - bearing_model(x, tau, obs))
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        return -w[:, None] * bo_jacobian(x, tau, obs)
+
+    (b0, s0), (b1, s1) = end_value(t, y, t0), end_value(t, y, t1)
+    search = PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * s0, 10 * s1), min_range_m,
+                         max_range_m, t1 - t0, o0, o1)
+    x = global_then_local(lambda p: bo_cost_population(p, tau, obs, y, w), res, jac,
+                          search.bounds, search.to_state, seed, popsize=popsize,
+                          maxiter=maxiter)
+    r = res(x)
+    sig = sigma_rad if sigma_rad else float(np.sqrt(np.sum(r**2) / max(t.size - 4, 1)))
+    if not sigma_rad:  # re-weight with the estimated σ
+        r, w[:] = r / sig, 1.0 / sig
+    return finish_solution("bearings", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig), o0,
+                           bearing_model(x, tau, obs), n_used=t.size, n_rejected=n_rej)
+
+
+def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
+                        observer_xy: np.ndarray, sigma_rad: float | None = None,
+                        side: str = "auto", **kw: object) -> TmaSolution:
+    """Bearings-only TMA from a line array's cone angles, resolving the mirror ambiguity.
+
+    Parameters
+    ----------
+    times : (B,) array_like
+        s.
+    cone_rad : (B,) array_like
+        Cone angles (rad, 0 forward end-fire).
+    heading_rad : (B,) array_like
+        Array heading at each time (rad clockwise from north).
+    observer_xy : (B, 2) array_like
+        Array phase-centre positions (m).
+    sigma_rad : float, optional
+        Bearing (cone) standard deviation (rad).
+    side : {"port", "starboard", "auto"}
+        Mirror hypothesis: bearing ``heading − θ`` (port) or ``heading + θ`` (starboard);
+        ``auto`` solves both and keeps the smaller cost (with ``sigma_rad`` None, σ is then
+        the robust residue scale of a polynomial fitted to the cone angles, the same for
+        both hypotheses).
+    **kw
+        Passed to :func:`solve_bearings`.
+
+    Returns
+    -------
+    TmaSolution
+        With ``side`` and, for ``auto``, ``cost_other`` (the rejected hypothesis's cost).
+    """
+    if side not in SIDES:
+        raise ValueError(f"side must be one of {SIDES}, not {side!r}")
+    cone = np.asarray(cone_rad, float)
+    hd = np.asarray(heading_rad, float)
+    if not sigma_rad and side == "auto":
+        # one σ for both hypotheses, so that their costs compare: the robust scale of the
+        # residues of a polynomial fitted to the cone-angle sequence
+        t = np.asarray(times, float)
+        keep = reject_outliers(t, cone, None, int(kw.get("poly_degree", 5)))
+        deg = int(min(int(kw.get("poly_degree", 5)), max(keep.sum() - 2, 0)))
+        fit = np.polynomial.Polynomial.fit(t[keep], cone[keep], deg)
+        sigma_rad = float(1.4826 * np.median(np.abs(cone[keep] - fit(t[keep]))))
+    sols = {}
+    for s, sign in (("port", -1.0), ("starboard", 1.0)):
+        if side in (s, "auto"):
+            sol = solve_bearings(times, hd + sign * cone, observer_xy, sigma_rad, **kw)
+            sol.side = s
+            sols[s] = sol
+    if len(sols) == 1:
+        return next(iter(sols.values()))
+    best, other = sorted(sols.values(), key=lambda s: s.cost)
+    best.cost_other = other.cost
+    return best
