@@ -18,34 +18,19 @@ import numpy as np
 
 from arrayproc.errors import ConfigError
 
+# the angle helpers live in geo.angles; re-exported here for existing imports
+from arrayproc.geo.angles import interp_angle_deg, true_bearing, wrap_180, wrap_pi
+
+__all__ = ["KNOT", "Segment", "Trajectory", "course_to_velocity", "interp_angle_deg",
+           "true_bearing", "wrap_180", "wrap_pi"]
+
 KNOT = 1852.0 / 3600.0  # m/s per knot
-
-
-def true_bearing(dx: np.ndarray | float, dy: np.ndarray | float) -> np.ndarray:
-    """True bearing (rad, in [0, 2π)) of the vector (dx east, dy north): ``atan2(dx, dy)``."""
-    return np.mod(np.arctan2(dx, dy), 2.0 * np.pi)
-
-
-def wrap_pi(a: np.ndarray | float) -> np.ndarray:
-    """Wrap angles (rad) to [-π, π)."""
-    return np.mod(np.asarray(a) + np.pi, 2.0 * np.pi) - np.pi
-
-
-def wrap_180(a: np.ndarray | float) -> np.ndarray:
-    """Wrap angles (deg) to [-180, 180)."""
-    return np.mod(np.asarray(a) + 180.0, 360.0) - 180.0
 
 
 def course_to_velocity(course_deg: np.ndarray | float, speed: np.ndarray | float) -> np.ndarray:
     """Velocity (vx east, vy north), m/s, of a course (deg true) and speed (m/s); (..., 2)."""
     c = np.deg2rad(course_deg)
     return np.stack(np.broadcast_arrays(speed * np.sin(c), speed * np.cos(c)), axis=-1)
-
-
-def interp_angle_deg(t: np.ndarray, tp: np.ndarray, ap_deg: np.ndarray) -> np.ndarray:
-    """Interpolate angles (deg) on the circle: linear in the unwrapped angle, result in [0, 360)."""
-    unwrapped = np.rad2deg(np.unwrap(np.deg2rad(np.asarray(ap_deg, dtype=float))))
-    return np.mod(np.interp(t, tp, unwrapped), 360.0)
 
 
 @dataclass(frozen=True)
