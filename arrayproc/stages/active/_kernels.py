@@ -48,6 +48,57 @@ def power(z: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - numba
 
 
 @njit(cache=True, nogil=True)
+def mul_rows(bank: np.ndarray, spec: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    """``out[d, k] = bank[d, k] * spec[k]`` (complex64), one thread (callers thread by beam)."""
+    for d in range(bank.shape[0]):
+        for k in range(bank.shape[1]):
+            out[d, k] = bank[d, k] * spec[k]
+
+
+@njit(cache=True, nogil=True)
+def power_rows(z: np.ndarray, r0: int, out: np.ndarray) -> None:  # pragma: no cover - numba
+    """``out[d, j] = |z[d, r0 + j]|^2`` (float32), one thread."""
+    for d in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            v = z[d, r0 + j]
+            out[d, j] = v.real * v.real + v.imag * v.imag
+
+
+@njit(cache=True, nogil=True)
+def _ca_row_interior(row: np.ndarray, cs: np.ndarray, g: int, t: int, mode: int, a_full: float,
+                     a_half: float, r0: int, r1: int, d: int, rows: np.ndarray,
+                     cols: np.ndarray, vals: np.ndarray, noise: np.ndarray,
+                     n: int) -> int:  # pragma: no cover - numba
+    """1-D CA/GO/SO over the cells of one row whose window lies inside the row (constant N):
+    the fast path of :func:`cfar_plane`. ``cs`` is the row's prefix sum."""
+    w = g + t
+    inv_t = 1.0 / t
+    inv_n = 0.5 / t
+    cap = rows.size
+    for r in range(r0, r1):
+        x = row[r]
+        s1 = cs[r - g] - cs[r - w]
+        s2 = cs[r + w + 1] - cs[r + g + 1]
+        if mode == MODE_CA:
+            est = (s1 + s2) * inv_n
+            thr = a_full * est
+        elif mode == MODE_GO:
+            est = max(s1, s2) * inv_t
+            thr = a_half * est
+        else:
+            est = min(s1, s2) * inv_t
+            thr = a_half * est
+        if x > thr:
+            if n < cap:
+                rows[n] = d
+                cols[n] = r
+                vals[n] = x
+                noise[n] = est
+            n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
 def _prefix(v: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - numba
     s = 0.0
     out[0] = 0.0
@@ -95,7 +146,11 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
         fa, fb = max(0, d - wd), min(nd, d + wd + 1)
         ga, gb = max(0, d - gd), min(nd, d + gd + 1)
         nf, ng = fb - fa, gb - ga
-        if mode != MODE_OS:
+        one_d = wd == 0
+        if mode != MODE_OS and one_d:  # 1-D: the row's own prefix sums serve both
+            _prefix(p[d], ff)
+            gg[:] = ff
+        elif mode != MODE_OS:
             for r in range(nr):
                 sf = 0.0
                 for i in range(fa, fb):
@@ -107,7 +162,18 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
                 colg[r] = sg
             _prefix(colf, ff)
             _prefix(colg, gg)
+        fast = mode != MODE_OS and wd == 0 and gd == 0
+        ia, ib = r0, r0  # interior handled by the fast path: none unless fast
+        if fast:  # interior columns by the constant-N fast path, edges below
+            ia, ib = max(r0, wr), min(r1, nr - wr)
+            if ib > ia:
+                n = _ca_row_interior(p[d], ff, gr, tr, mode, alpha_n[2 * tr], alpha_half, ia,
+                                     ib, d, rows, cols, vals, noise, n)
+            else:
+                ia, ib = r0, r0
         for r in range(r0, r1):
+            if ia <= r < ib:
+                continue
             x = p[d, r]
             # lead: columns [r - wr, r - 1], guard part [r - gr, r - 1]; lag mirrored
             la, lb = max(0, r - wr), r
@@ -145,7 +211,7 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
                 continue
             s_lead = (ff[lb] - ff[la]) - (gg[kb] - gg[ka])
             s_lag = (ff[ub] - ff[ua]) - (gg[vb] - gg[va])
-            s_mid = colf[r] - colg[r]
+            s_mid = 0.0 if one_d else colf[r] - colg[r]
             if (mode == MODE_GO or mode == MODE_SO) and n_lead == half_n and n_lag == half_n:
                 m1 = s_lead / n_lead
                 m2 = s_lag / n_lag

@@ -26,7 +26,10 @@ import numpy as np
 import scipy.fft as sfft
 from scipy.signal import zoom_fft
 
+from arrayproc.dsp.fft import BufferedPlan
 from arrayproc.errors import ConfigError
+
+from . import _kernels as K
 
 DOPPLER_INSENSITIVE = ("hfm", "lfm")
 
@@ -196,27 +199,39 @@ def replica_spectra(replica: np.ndarray, fs: float, f0: float, df: float, n: int
     return out
 
 
-def correlate(spec: np.ndarray, bank: np.ndarray, out: np.ndarray, work: np.ndarray,
-              r0: int = 0, workers: int = 1) -> None:
-    """Square-law matched-filter rows of one beam: ``out[d] = |ifft(spec * bank[d])[r0:r0+R]|^2``.
+class Correlator:
+    """Square-law matched-filter rows of one beam at a time, for one bank shape (D, K):
+    ``out[d] = |ifft(spec * bank[d])[r0:r0 + R]|^2``.
 
-    Parameters
-    ----------
-    spec : (K,) complex64
-        FFT of the beam's baseband series.
-    bank : (D, K) complex64
-        From :func:`replica_spectra`.
-    out : (D, R) float32
-        Written in place (R lags from lag ``r0``).
-    work : (D, K) complex64
-        Scratch.
-    r0 : int
-        First lag kept.
-    workers : int
-        scipy.fft threads.
+    Owns its inverse-FFT plan (:class:`arrayproc.dsp.fft.BufferedPlan`, ducc0 when installed)
+    and runs on one thread; the callers give each worker thread its own Correlator.
     """
-    from . import _kernels as K
 
-    np.multiply(bank, spec[None, :], out=work)
-    z = sfft.ifft(work, axis=1, overwrite_x=True, workers=workers)
-    K.power(z[:, r0:r0 + out.shape[1]], out)
+    def __init__(self, d: int, k: int) -> None:
+        self.plan = BufferedPlan("ifft", (d, k), np.complex64, axis=1)
+
+    def __call__(self, spec: np.ndarray, bank: np.ndarray, out: np.ndarray,
+                 r0: int = 0) -> None:
+        """Fill ``out`` (D, R) float32.
+
+        Parameters
+        ----------
+        spec : (K,) complex64
+            FFT of the beam's baseband series.
+        bank : (D, K) complex64
+            From :func:`replica_spectra`.
+        out : (D, R) float32
+            |chi|^2 for lags r0 ... r0 + R - 1 (baseband samples).
+        r0 : int
+            First lag kept.
+        """
+        K.mul_rows(bank, spec, self.plan.input)
+        z = self.plan()
+        K.power_rows(z, int(r0), out)
+
+
+def correlate(spec: np.ndarray, bank: np.ndarray, out: np.ndarray, r0: int = 0) -> None:
+    """One-off :class:`Correlator` call (tests, scripts): ``out[d] = |ifft(spec bank[d])|^2``
+    from lag r0 on."""
+    Correlator(*bank.shape)(np.ascontiguousarray(spec, np.complex64),
+                            np.ascontiguousarray(bank, np.complex64), out, r0)

@@ -1,0 +1,133 @@
+"""``active_beams``: beam time series of each ping's receive window (thesis ch. 4, the first
+step of the active chain; beamformer of :mod:`arrayproc.stages.active.beamform`, eq. (2.8)).
+
+For every transmission in the recording's ``/active/pings`` the stage gathers the samples from
+the transmission time t_p to t_p + ``window_s`` + the pulse length (``window_s`` = 0: up to the
+next transmission, or the recording's end), beamforms them in the frequency domain over the
+waveform's band and yields one block per ping: complex baseband beam series, domain
+``("beam", "time")``, (B, K) complex64 at ``fs = fs_bb``, ``t0 = t_p``. ``meta``: ``ping``,
+``waveform`` (name), ``plan`` (:class:`arrayproc.stages.active.bank.BandPlan`), ``n_lags``
+(lags 0 ... n_lags-1 are complete echoes inside the window), ``speed`` (m/s) and ``heading``
+(deg) of the array at t_p, ``projector`` (body-frame offset, m). Input blocks are consumed, not
+passed on; memory holds one window of hydrophone samples and the beams of one ping.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import numpy as np
+
+from arrayproc.chain import Block, Param, Stage, register
+from arrayproc.errors import ConfigError
+
+from . import _common as cm
+from .bank import band_plan
+from .beamform import beam_axis, beam_series, element_advances
+
+
+@register
+class ActiveBeams(Stage):
+    """Beam time series per ping receive window (see module doc)."""
+
+    kind = "active_beams"
+    params = {
+        "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
+                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+        "window_s": Param("float", 0.0, "receive window after each transmission, s (0: up to "
+                          "the next transmission)"),
+        "band": Param("band", None, "[lo, hi] Hz kept as complex baseband (default: the "
+                      "waveform's main lobe widened by the Doppler of +-15 m/s)"),
+        "shading": Param("str", "hann", "array shading", choices=("none", "hann", "hamming")),
+        "threads": Param("int", 0, "FFT and beamforming threads (0: all cores)"),
+    }
+
+    def validate(self) -> None:
+        w = f"stage {self.name!r}"
+        if self.window_s < 0:
+            raise ConfigError(f"{w}: key 'window_s' must be >= 0 s, got {self.window_s}")
+        try:
+            self.beam_axis, self._dirs, self.beam_mode = beam_axis(self.beams)
+        except ConfigError as e:
+            raise ConfigError(f"{w}: {e}") from None
+        self._tau_key = None
+
+    def _workers(self) -> int:
+        return self.threads if self.threads > 0 else (os.cpu_count() or 1)
+
+    def _window(self, act, i: int, fs: float, n_total: int) -> tuple[int, int, int]:
+        """(first sample, samples to transform, complete lags) of ping i."""
+        tp = float(act.time[i])
+        wf = act.waveforms[act.waveform[i]]
+        if self.window_s > 0:
+            span = self.window_s
+        elif i + 1 < act.time.size:
+            span = float(act.time[i + 1]) - tp
+        else:
+            span = n_total / fs - tp
+        s0 = int(round(tp * fs))
+        n_pulse = int(np.ceil(wf.duration * fs)) + 1
+        n_lag = max(1, int(round(span * fs)))
+        return s0, n_lag + n_pulse, n_lag
+
+    def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        rec = self.ctx.recording
+        where = f"stage {self.name!r}"
+        act = cm.schedule(rec, where)
+        c = self.ctx.sound_speed
+        fs = rec.fs
+        n_total = rec.n_samples
+        wins = [self._window(act, i, fs, n_total) for i in range(act.time.size)]
+        plans = {}
+        for name, wf in act.waveforms.items():
+            band = tuple(self.band) if self.band is not None else cm.default_band(wf, c, fs)
+            plans[name] = band
+        buf = np.zeros((0, 0), np.float32)
+        buf_start = 0
+        nxt = 0  # next ping to emit
+        positions = None
+        for b in blocks:
+            x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
+            s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
+            positions = b.positions
+            if buf.shape[0] == 0 or buf_start + buf.shape[0] != s0:
+                buf, buf_start = np.asarray(x, np.float32), s0
+            else:
+                buf = np.concatenate([buf, x])
+            end = buf_start + buf.shape[0]
+            while nxt < len(wins) and (wins[nxt][0] + wins[nxt][1] <= end
+                                       or end >= n_total):
+                yield self._ping(act, nxt, wins[nxt], buf, buf_start, plans, positions, fs, c)
+                nxt += 1
+            keep = wins[nxt][0] if nxt < len(wins) else end
+            drop = max(0, min(keep - buf_start, buf.shape[0]))
+            if drop:
+                buf = buf[drop:]
+                buf_start += drop
+
+    def _ping(self, act, i: int, win: tuple[int, int, int], buf: np.ndarray, buf_start: int,
+              plans: dict, positions: np.ndarray, fs: float, c: float) -> Block:
+        s0, n, n_lag = win
+        x = np.zeros((n, buf.shape[1]), np.float32)
+        a = max(s0, buf_start)
+        bnd = min(s0 + n, buf_start + buf.shape[0])
+        if bnd > a:
+            x[a - s0:bnd - s0] = buf[a - buf_start:bnd - buf_start]
+        name = act.waveform[i]
+        plan = band_plan(fs, n, plans[name])
+        key = (positions.tobytes(), c)
+        if key != self._tau_key:
+            self._tau = element_advances(positions, self._dirs, self.beam_mode, c)
+            self._w = cm.shading(self.shading, positions)
+            self._tau_key = key
+        y = beam_series(x, plan, self._tau, self._w, workers=self._workers())
+        tp = float(act.time[i])
+        pose = self.ctx.recording.pose(tp)
+        n_lags = min(plan.n_bins, int(np.floor(n_lag * plan.fs_bb / fs)))
+        return Block(y, cm.BEAM_DOMAIN, tp, n / fs, plan.fs_bb, positions, pose=pose,
+                     beams=self.beam_axis, index=i,
+                     meta={"ping": i, "waveform": name, "plan": plan, "n_lags": n_lags,
+                           "speed": float(pose.speed), "heading": float(pose.heading),
+                           "projector": np.asarray(act.projector, float),
+                           "beam_mode": self.beam_mode})
