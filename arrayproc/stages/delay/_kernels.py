@@ -21,7 +21,7 @@ from numba import njit, prange
 
 
 @njit(cache=True, fastmath=False)
-def _corr_derivs(g_re, g_im, f0, df, tau):
+def _corr_derivs(g, f0, df, tau):
     """r(τ), r'(τ), r''(τ) of one row of the cross-spectrum (see module docstring)."""
     w0 = 2.0 * math.pi * f0
     dw = 2.0 * math.pi * df
@@ -33,9 +33,9 @@ def _corr_derivs(g_re, g_im, f0, df, tau):
     r1 = 0.0
     r2 = 0.0
     w = w0
-    for k in range(g_re.shape[0]):
-        a = g_re[k]
-        b = g_im[k]
+    for k in range(g.shape[0]):
+        a = g[k].real
+        b = g[k].imag
         re = a * c - b * s  # Re(G e^{jθ})
         im = a * s + b * c  # Im(G e^{jθ})
         r += re
@@ -48,13 +48,13 @@ def _corr_derivs(g_re, g_im, f0, df, tau):
 
 
 @njit(cache=True, parallel=True)
-def refine_peaks(g_re, g_im, rows, f0, df, tau0, lo, hi, n_iter):
+def refine_peaks(g, rows, f0, df, tau0, lo, hi, n_iter):
     """Newton search for the maximum of r(τ) of each row, kept inside [lo, hi].
 
     Parameters
     ----------
-    g_re, g_im : (m_rows, n_bins) float64
-        Real and imaginary parts of the (weighted) cross-spectrum rows.
+    g : (m_rows, n_bins) complex
+        (Weighted) cross-spectrum rows.
     rows : (m,) int64
         Row of ``g`` each search runs on (several searches may share a row).
     f0, df : float
@@ -78,13 +78,13 @@ def refine_peaks(g_re, g_im, rows, f0, df, tau0, lo, hi, n_iter):
     for i in prange(m):
         t = tau0[i]
         row = rows[i]
-        r, r1, r2 = _corr_derivs(g_re[row], g_im[row], f0, df, t)
+        r, r1, r2 = _corr_derivs(g[row], f0, df, t)
         for _ in range(n_iter):
             if r2 >= 0.0:
                 break
             step = -r1 / r2
             tn = min(max(t + step, lo[i]), hi[i])
-            rn, r1n, r2n = _corr_derivs(g_re[row], g_im[row], f0, df, tn)
+            rn, r1n, r2n = _corr_derivs(g[row], f0, df, tn)
             if rn < r:  # a step that lowers the peak is refused
                 break
             t, r, r1, r2 = tn, rn, r1n, r2n
@@ -97,13 +97,31 @@ def refine_peaks(g_re, g_im, rows, f0, df, tau0, lo, hi, n_iter):
 
 
 @njit(cache=True, parallel=True)
-def corr_at(g_re, g_im, f0, df, tau):
+def predicted_peaks(g, rows, f0, df, tau0, lo, hi):
+    """One Newton step from each start: the lag it lands on (inside [lo, hi]) and the height
+    r + r'²/(2|r''|) the quadratic model predicts there (r itself where r'' ≥ 0)."""
+    m = tau0.shape[0]
+    tau = np.empty(m)
+    pk = np.empty(m)
+    for i in prange(m):
+        r, r1, r2 = _corr_derivs(g[rows[i]], f0, df, tau0[i])
+        if r2 < 0.0:
+            tau[i] = min(max(tau0[i] - r1 / r2, lo[i]), hi[i])
+            pk[i] = r - 0.5 * r1 * r1 / r2
+        else:
+            tau[i] = tau0[i]
+            pk[i] = r
+    return tau, pk
+
+
+@njit(cache=True, parallel=True)
+def corr_at(g, f0, df, tau):
     """r(τ) and r''(τ) of each row at the given lags (s), as in :func:`refine_peaks`."""
-    m = g_re.shape[0]
+    m = g.shape[0]
     rv = np.empty(m)
     r2v = np.empty(m)
     for i in prange(m):
-        r, r1, r2 = _corr_derivs(g_re[i], g_im[i], f0, df, tau[i])
+        r, r1, r2 = _corr_derivs(g[i], f0, df, tau[i])
         rv[i] = r
         r2v[i] = r2
     return rv, r2v

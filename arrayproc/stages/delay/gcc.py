@@ -47,7 +47,7 @@ from scipy.ndimage import uniform_filter1d
 
 from arrayproc.dsp import fft
 
-from ._kernels import corr_at, refine_peaks, windowed_peaks
+from ._kernels import corr_at, predicted_peaks, refine_peaks, windowed_peaks
 
 WEIGHTINGS = ("none", "phat", "scot", "ml")
 INTERPS = ("fft", "parabolic", "none")
@@ -285,22 +285,27 @@ class GccEstimator:
             tau = tau + delta
             peak = y1 - 0.25 * (y0 - y2) * delta
         tau = np.clip(tau / self.fs, -lim_s, lim_s)
+        Gm = np.ascontiguousarray(Gw.reshape(m, nb))
         if self.interp == "fft":
-            Gw64 = Gw.reshape(m, nb).astype(np.complex128)
             centre = (idx - L) / self.fs
             lo = np.maximum(centre - 1.0 / self.fs, -lim_s)
             hi = np.minimum(centre + 1.0 / self.fs, lim_s)
-            tau, peak, _ = refine_peaks(np.ascontiguousarray(Gw64.real),
-                                        np.ascontiguousarray(Gw64.imag), rows, self.freqs[0],
-                                        self.df, tau, lo, hi, self.n_iter)
+            if K > 1:  # one Newton step each, then refine only the near-best candidates
+                tau, pred = predicted_peaks(Gm, rows, self.freqs[0], self.df, tau, lo, hi)
+                top = np.full(m, -np.inf)
+                np.maximum.at(top, rows, pred)
+                sel = pred >= top[rows] - 0.02 * np.abs(top[rows])
+                rows, tau, lo, hi = rows[sel], tau[sel], lo[sel], hi[sel]
+            tau, peak, _ = refine_peaks(Gm, rows, self.freqs[0], self.df, tau, lo, hi,
+                                        self.n_iter)
         # the highest refined candidate of each row (rows are in order in ``rows``)
         order = np.lexsort((-peak, rows))
         first = np.r_[0, np.flatnonzero(np.diff(rows[order])) + 1]
         tau = tau[order[first]]
-        Gu = G.reshape(m, nb).astype(np.complex128)
-        ru, ru2 = corr_at(np.ascontiguousarray(Gu.real), np.ascontiguousarray(Gu.imag),
-                          self.freqs[0], self.df, np.ascontiguousarray(tau))
-        E = (X.real.astype(np.float64)**2 + X.imag.astype(np.float64)**2).sum(axis=-1)
+        Gu = G.reshape(m, nb)
+        ru, ru2 = corr_at(Gu, self.freqs[0], self.df, np.ascontiguousarray(tau))
+        Xf = X.view(np.float32 if X.dtype == np.complex64 else np.float64)
+        E = np.einsum("ijk,ijk->ij", Xf, Xf, dtype=np.float64)
         norm = np.sqrt(np.maximum(E * E[:, ref][:, None], 1e-300)).reshape(-1)
         rho = ru / norm
         tau = tau.reshape(S, n_ch)

@@ -197,7 +197,7 @@ def solve_direction(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
                     min_corr: float = 0.3) -> tuple[np.ndarray, np.ndarray, int] | None:
     """Far-field direction from the delays of a planar or line array (or any array).
 
-    The slowness k = u/c solves τ_i = −(p_i − p_ref)·k by weighted least squares in the
+    The direction u solves τ_i = −(p_i − p_ref)·u/c by weighted least squares in the
     subspace the elements span; the remaining component follows from |u| = 1 with a positive
     sign along the array's normal (for a planar array the mirror image through the plane is
     equally likely; for a line array only the cone angle is meaningful).
@@ -235,9 +235,8 @@ def solve_direction(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     C = tdoa.reference_covariance(sigma[use])
     Ci = np.linalg.inv(C)
     N = A.T @ Ci @ A
-    a = np.linalg.solve(N, A.T @ Ci @ tau[use])  # in-span slowness, s/m
-    k_in = B @ a
-    u_in = k_in * c
+    a = np.linalg.solve(N, A.T @ Ci @ tau[use])  # in-span part of u (A carries the 1/c)
+    u_in = B @ a
     n_in = float(np.linalg.norm(u_in))
     if n_in > 1.0:
         u = u_in / n_in
@@ -246,5 +245,5 @@ def solve_direction(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
         if rank < 3:
             normal = vt[rank] if rank == 2 else vt[1]
             u = u + np.sqrt(1.0 - n_in**2) * normal
-    cov_u = c**2 * (B @ np.linalg.inv(N) @ B.T)
+    cov_u = B @ np.linalg.inv(N) @ B.T
     return u, cov_u, int(use.sum())

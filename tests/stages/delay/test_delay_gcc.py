@@ -124,7 +124,7 @@ def test_kernels_against_numpy():
     G = rng.standard_normal((m, nb)) + 1j * rng.standard_normal((m, nb))
     f = 100.0 + 2.5 * np.arange(nb)
     tau = rng.uniform(-1e-3, 1e-3, m)
-    r, r2 = corr_at(G.real.copy(), G.imag.copy(), f[0], 2.5, tau)
+    r, r2 = corr_at(G, f[0], 2.5, tau)
     ref = np.real((G * np.exp(2j * np.pi * f * tau[:, None])).sum(1))
     ref2 = -np.real((G * (2 * np.pi * f) ** 2 * np.exp(2j * np.pi * f * tau[:, None])).sum(1))
     np.testing.assert_allclose(r, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
@@ -139,7 +139,7 @@ def test_refine_finds_the_continuous_maximum():
     true = np.array([1.3e-4, -2.2e-4])
     G = np.exp(-2j * np.pi * f * true[:, None]) * (1 + 0.1 * rng.standard_normal((2, nb)))
     start = np.round(true * FS) / FS
-    tau, r, _ = refine_peaks(G.real.copy(), G.imag.copy(), np.arange(2), f[0], 1.0, start,
+    tau, r, _ = refine_peaks(G, np.arange(2), f[0], 1.0, start,
                              start - 1 / FS, start + 1 / FS, 20)
     for i in range(2):
         grid = np.linspace(start[i] - 1 / FS, start[i] + 1 / FS, 20001)

@@ -1,0 +1,69 @@
+"""Detections plot: a channel's spectrogram (frequency across, time running down) with the
+time-frequency boxes of the ``detections`` product."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from arrayproc.plots import register_plot
+from arrayproc.plots._delay import groups_of, source_recording
+
+
+@register_plot("detections")
+def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: int = 1024,
+                    range_db: float = 50.0, fmax: float | None = None) -> None:
+    """Draw the spectrogram of ``channel`` (default: the detections' channel) of the recording
+    the products file ``path`` was made from, with each detection's box, into ``out_png``.
+
+    Parameters
+    ----------
+    path : str
+        Products file holding a ``detections`` group.
+    out_png : str
+        Output image.
+    channel : int, optional
+        Channel shown.
+    nfft : int
+        Spectrogram frame (Hann, 50 % overlap), samples.
+    range_db : float
+        Colour range below the 99.9th percentile, dB.
+    fmax : float, optional
+        Highest frequency shown, Hz (default: twice the highest detection band edge).
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+    from scipy.signal import spectrogram
+
+    found, root = groups_of(path, "detections")
+    name, g = found[0]
+    t0, t1 = g.get("time_start", np.zeros(0)), g.get("time_end", np.zeros(0))
+    lo, hi = g.get("freq_lo", np.zeros(0)), g.get("freq_hi", np.zeros(0))
+    ch = int(channel if channel is not None else (g["channel"][0] if "channel" in g
+                                                   and len(g["channel"]) else 0))
+    with source_recording(root, path, "detections") as rec:
+        x = rec.read()[:, ch].astype(float)
+        fs = rec.fs
+    f, t, S = spectrogram(x, fs, window="hann", nperseg=nfft, noverlap=nfft // 2,
+                          scaling="density")
+    L = 10 * np.log10(np.maximum(S, 1e-30)).T  # (time, freq)
+    top = float(np.percentile(L, 99.9))
+    if fmax is None:
+        fmax = min(fs / 2, 2 * float(hi.max())) if hi.size else fs / 2
+    keep = f <= fmax
+    fig, ax = plt.subplots(figsize=(8.0, 8.0), dpi=110)
+    im = ax.imshow(L[:, keep], aspect="auto", cmap="viridis", vmin=top - range_db, vmax=top,
+                   extent=[f[0], f[keep][-1], t[-1] + nfft / fs / 2, t[0] - nfft / fs / 2],
+                   interpolation="nearest")
+    cb = fig.colorbar(im, ax=ax, pad=0.02)
+    cb.set_label(f"PSD, dB re 1 unit²/Hz ({range_db:g} dB range)")
+    for a, b, fl, fh in zip(t0, t1, lo, hi):
+        ax.add_patch(Rectangle((fl, a), fh - fl, b - a, fill=False, ec="red", lw=1.2))
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("time (s since recording start)")
+    ax.set_title(f"channel {ch} spectrogram with {len(t0)} detections ({name})\n"
+                 f"{Path(path).name}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out_png)
+    plt.close(fig)

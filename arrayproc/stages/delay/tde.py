@@ -1,0 +1,110 @@
+"""``tde``: delays of every channel relative to a reference channel → products ``delays``.
+
+Per event block (from ``transients``) or per regular snapshot of ``nfft`` samples every ``hop``
+(time blocks, for towed arrays). ``method = "xcorr"``: generalised cross-correlation, thesis
+eqs. (3.26)-(3.27), with the ``weighting`` none / phat / scot / ml, the search limited to
+|τ_i| ≤ |p_i − p_ref|/c + ``margin``, sub-sample peak by ``interp`` (``fft``: band-limited
+maximum, the limit of the thesis's interpft; ``parabolic``; ``none``) (:mod:`.gcc`).
+``method = "unwrap"``: phase-unwrapping LLS, eqs. (3.30)-(3.36) with app. B (:mod:`.unwrap`).
+σ per delay from the peak's curvature and the normalised correlation (:func:`.gcc.delay_sigma`).
+
+Products ``delays`` (DESIGN section 5): ``time`` (detection centre or snapshot centre, s),
+``tau``, ``sigma`` (n, n_ch) s, ``corr`` (n, n_ch); group attr ``reference``. Yields one
+delays block per row (:mod:`._common`) for the ``localise`` stage.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from arrayproc.chain import Param, Stage, positive, register
+from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
+from arrayproc.dsp.framing import FrameBuffer
+from arrayproc.errors import ConfigError
+
+from ._common import DELAYS, DelaysMeta
+from .gcc import INTERPS, WEIGHTINGS, GccEstimator
+from .unwrap import UnwrapEstimator
+
+
+@register
+class Tde(Stage):
+    """Time-delay estimation between hydrophones (see the module docstring)."""
+
+    kind = "tde"
+    accepts = frozenset({Domain.EVENT, Domain.TIME})
+    produces = DELAYS  # type: ignore[assignment]
+    params = {
+        "reference": Param("int", 0, "reference channel"),
+        "band": Param("band", None, "band [lo, hi] Hz of the cross-spectrum (default: all)"),
+        "method": Param("str", "xcorr", "xcorr or unwrap", choices=("xcorr", "unwrap")),
+        "weighting": Param("str", "none", "GCC weighting", choices=WEIGHTINGS),
+        "interp": Param("str", "fft", "sub-sample peak", choices=INTERPS),
+        "margin": Param("float", 1e-4, "added to the geometric lag limit, s"),
+        "smooth_bins": Param("int", 9, "bins averaged for the scot/ml spectra",
+                             check=positive),
+        "nfft": Param("int", None, "snapshot length for time blocks, samples"),
+        "hop": Param("int", None, "snapshot hop for time blocks, samples (default nfft/2)"),
+        "unwrap_threshold": Param("float", 0.5, "app. B residual RMS threshold, rad",
+                                  check=positive),
+        "unwrap_window": Param("int", 16, "app. B sliding window, bins", check=positive),
+    }
+
+    def validate(self) -> None:
+        if self.nfft is not None and self.nfft < 16:
+            raise ConfigError(f"stage {self.name!r}: key 'nfft': must be >= 16")
+        if self.hop is not None and self.hop < 1:
+            raise ConfigError(f"stage {self.name!r}: key 'hop': must be >= 1")
+
+    def _estimator(self, n: int, fs: float, positions: np.ndarray):
+        p = np.asarray(positions, float)
+        if not 0 <= self.reference < p.shape[0]:
+            raise ConfigError(f"stage {self.name!r}: key 'reference': {self.reference} outside "
+                              f"0..{p.shape[0] - 1}")
+        lim = np.linalg.norm(p - p[self.reference], axis=1) / self.ctx.sound_speed + self.margin
+        if self.method == "unwrap":
+            return UnwrapEstimator(n, fs, self.reference, self.band, self.unwrap_threshold,
+                                   self.unwrap_window, 20, lim)
+        return GccEstimator(n, fs, p.shape[0], self.reference, self.band, lim, self.weighting,
+                            self.interp, self.smooth_bins)
+
+    def _world(self, b: Block) -> np.ndarray:
+        return b.pose.elements if b.pose is not None else np.asarray(b.positions, float)
+
+    def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        out = self.products("delays", reference=self.reference)
+        frames = None
+        est = None
+        for b in blocks:
+            if b.domain == Domain.EVENT:
+                if b.data.shape[0] < 16:
+                    continue
+                e = self._estimator(b.data.shape[0], b.fs, b.positions)
+                d = e(b.data[None])
+                t = np.array([0.5 * (b.meta.time_start + b.meta.time_end)])
+                yield from self._emit(out, t, d, b, b.meta.event)
+                continue
+            if self.nfft is None:
+                raise ConfigError(f"stage {self.name!r}: time blocks need key 'nfft' (or read "
+                                  "event blocks from a 'transients' stage)")
+            if frames is None:
+                frames = FrameBuffer(self.nfft, self.hop or self.nfft // 2)
+                est = self._estimator(self.nfft, b.fs, b.positions)
+            fr, starts = frames.push(b.data[: b.meta.n_valid], b.meta.sample0)
+            if fr.shape[0]:
+                d = est(fr)
+                t = (starts + 0.5 * self.nfft) / b.fs
+                yield from self._emit(out, t, d, b, -1)
+
+    def _emit(self, out, t, d, b: Block, event: int) -> Iterator[Block]:
+        if out is not None:
+            out.append(time=t, tau=d.tau, sigma=d.sigma, corr=d.corr)
+        el = self._world(b)
+        for i in range(t.size):
+            meta = DelaysMeta(float(t[i]), d.sigma[i], d.corr[i], self.reference, el,
+                              self.ctx.sound_speed, event)
+            yield Block(d.tau[i], DELAYS, float(t[i]), 0.0, b.fs,  # type: ignore[arg-type]
+                        b.positions, b.pose, index=b.index, meta=meta)
