@@ -35,6 +35,7 @@ import tracemalloc
 import numpy as np
 
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.cbf import CBF, time_window
 from arrayproc.stages.passive.integrate import Integrate
@@ -60,8 +61,8 @@ def source(seconds: float):
     pos = line_array(N_CH, 0.36)
     n_blocks = int(np.ceil(seconds * FS / BLOCK))
     for k in range(n_blocks):
-        yield Block(pool[k % 4], ("time", "channel"), k * BLOCK / FS, BLOCK / FS, FS, pos, None,
-                    index=k, meta={"n_valid": BLOCK, "sample0": k * BLOCK})
+        yield Block(pool[k % 4], Domain.TIME, k * BLOCK / FS, BLOCK / FS, FS, pos, None,
+                    index=k, meta=TimeMeta(k * BLOCK, BLOCK))
 
 
 _STAGES: dict[int, CBF] = {}

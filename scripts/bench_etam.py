@@ -94,7 +94,7 @@ def main() -> None:
             t0 = time.perf_counter()
             ours = list(etam(iter(cleaned)))
             etam_s = time.perf_counter() - t0
-        nfft = cleaned[0].meta["nfft"]
+        nfft = cleaned[0].meta.nfft
         freqs = cleaned[0].freqs
         x = cleaned[0].positions[:, 0]
         spectra = [b.data[i].astype(complex) for b in cleaned for i in range(b.data.shape[0])]

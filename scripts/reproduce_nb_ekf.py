@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from arrayproc.chain import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.stages.condition.dft_filter import DFTFilter
 from arrayproc.stages.narrowband.cbf_baseline import cbf_track
 from arrayproc.stages.narrowband.ekf import NarrowbandEKF
@@ -143,16 +144,16 @@ def filtered(geo, duration: float, snr_db: float, seed: int):
             i1 = min(n_tot, i0 + n_chunk)
             t = np.arange(i0, i1) / FS
             y = synthesise(t, geo, x, snr_db, rng)
-            yield Block(y, ("time", "channel"), i0 / FS, (i1 - i0) / FS, FS, pos,
-                        meta={"sample0": i0, "n_valid": i1 - i0})
+            yield Block(y, Domain.TIME, i0 / FS, (i1 - i0) / FS, FS, pos,
+                        meta=TimeMeta(i0, i1 - i0))
 
     ys, t0 = [], None
     for b in stage.process(blocks()):
         if t0 is None:
             t0 = b.t0
-        ys.append(b.data[: b.meta["n_valid"]])
+        ys.append(b.data[: b.meta.n_valid])
     y = np.concatenate(ys)
-    return x, y, t0, b.fs, b.meta["fc"]
+    return x, y, t0, b.fs, b.meta.fc
 
 
 def run_ekf(y, t0, fs, fc, x, speed, cone0, f0, dual, reinit_s, q, block=400):

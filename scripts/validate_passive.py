@@ -28,9 +28,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests import test_cbf as tc  # noqa: E402  (the tests' exact plane-wave synthesis)
-from tests import test_dft_filter as td  # noqa: E402
-from tests import test_passive_e2e as te  # noqa: E402
+from arrayproc.chain.domains import Domain, TimeMeta  # noqa: E402
+from tests.stages import test_passive_e2e as te  # noqa: E402
+from tests.stages.beamform import test_cbf as tc  # noqa: E402  (exact plane-wave synthesis)
+from tests.stages.condition import test_dft_filter as td  # noqa: E402
 
 
 def pattern_error(theta0: float) -> float:
@@ -108,8 +109,8 @@ def gamma_ks(n_b: int) -> float:
     x = sigma * rng.standard_normal((nfft * n_b * 60, n_h))
     cbf = CBF(nfft=nfft, hop=nfft, window="none", band=[8.0, 500.0],
               beams={"start": 75.0, "stop": 75.0, "count": 1})
-    blocks = (Block(x[i:i + 4096].astype(np.float32), ("time", "channel"), i / fs, 4096 / fs,
-                    fs, pos, None, meta={"n_valid": 4096, "sample0": i})
+    blocks = (Block(x[i:i + 4096].astype(np.float32), Domain.TIME, i / fs, 4096 / fs,
+                    fs, pos, None, meta=TimeMeta(i, 4096))
               for i in range(0, x.shape[0], 4096))
     out = np.concatenate([o.data for o in Integrate(snapshots=n_b).process(cbf.process(blocks))])
     samples = out[:, :, 0].ravel() / (nfft * n_h * sigma**2)

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from arrayproc.chain.domains import META_TYPES, Domain
 
 
 @dataclass(frozen=True)
@@ -41,10 +43,10 @@ class Block:
     Attributes
     ----------
     data : ndarray
-        Axes named by ``domain``, e.g. ``("time", "channel")``, ``("freq", "channel")``,
-        ``("freq", "beam")``.
-    domain : tuple of str
-        Names of the axes of ``data``.
+        Axes named by ``domain`` (``domain.axes``).
+    domain : Domain
+        What the block holds (:mod:`arrayproc.chain.domains`): the axes of ``data`` and the
+        class of ``meta``.
     t0 : float
         Time of the block's first sample, s since the recording start.
     span : float
@@ -62,8 +64,9 @@ class Block:
         elevation, deg, for 3-D steering).
     index : int
         Running number of the snapshot within its stream.
-    meta : dict
-        Anything else a stage wants to pass downstream (e.g. ``nfft``, ``window`` gain).
+    meta : object
+        The domain's typed metadata (``TimeMeta``, ``SnapshotMeta``, ``PingMeta``,
+        ``EventMeta``; see :data:`arrayproc.chain.domains.META_TYPES`).
 
     A block's ``data`` is not modified once the block is yielded, by its producer or by any
     consumer: stages may keep references to their input blocks (the ``cbf`` stage windows its
@@ -71,7 +74,7 @@ class Block:
     """
 
     data: np.ndarray
-    domain: tuple[str, ...]
+    domain: Domain
     t0: float
     span: float
     fs: float
@@ -80,7 +83,13 @@ class Block:
     freqs: np.ndarray | None = None
     beams: np.ndarray | None = None
     index: int = 0
-    meta: dict[str, Any] = field(default_factory=dict)
+    meta: Any = None
+
+    def __post_init__(self) -> None:
+        want = META_TYPES.get(self.domain) if isinstance(self.domain, Domain) else None
+        if want is not None and not isinstance(self.meta, want):
+            raise TypeError(f"a {self.domain.value} block needs {want.__name__} metadata, "
+                            f"got {type(self.meta).__name__}")
 
     @property
     def t_centre(self) -> float:

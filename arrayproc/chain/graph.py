@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
 from arrayproc.config import Param, positive, tomllib
 from arrayproc.errors import ConfigError
@@ -61,6 +62,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
     stages: list[Stage] = []
     inputs: list[str | None] = []
     names: set[str] = set()
+    domains: dict[str | None, Domain] = {None: Domain.TIME}  # the reader yields time blocks
     for i, table in enumerate(tables):
         if not isinstance(table, Mapping):
             raise ConfigError(f"chain: stage {i + 1} is not a table")
@@ -87,6 +89,8 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
             src = stages[-1].name
         stage = STAGES[kind](name=name, **table)
         stage.upstream = next((s for s in stages if s.name == src), None)
+        stage.check_input(domains[src])  # the wiring, from the stages' declarations
+        domains[name] = stage.output_domain(domains[src])
         stages.append(stage)
         inputs.append(src)
         names.add(name)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.config import Param
 from arrayproc.errors import ConfigError
 
@@ -38,6 +39,22 @@ class Stage(ABC):
 
     kind: ClassVar[str] = ""
     params: ClassVar[dict[str, Param]] = {}
+    #: Domains of the blocks this stage reads (None: any).
+    accepts: ClassVar[frozenset[Domain] | None] = None
+    #: Domain of the blocks it yields (None: it passes its input's blocks on).
+    produces: ClassVar[Domain | None] = None
+
+    def output_domain(self, input_domain: Domain) -> Domain:
+        """Domain of the blocks this stage yields when it reads ``input_domain``."""
+        return self.produces if self.produces is not None else input_domain
+
+    def check_input(self, domain: Domain) -> None:
+        """Raise ConfigError unless the stage accepts blocks of ``domain``."""
+        if self.accepts is not None and domain not in self.accepts:
+            want = " or ".join(sorted(d.value for d in self.accepts))
+            got = getattr(domain, "value", domain)
+            raise ConfigError(f"stage {self.name!r} (type {self.kind!r}) needs {want} blocks, "
+                              f"but its input yields {got} blocks")
 
     def __init__(self, name: str | None = None, **values: Any) -> None:
         self.name = name or self.kind
@@ -93,7 +110,13 @@ class Stage(ABC):
         """The stage's generator transform (subclasses)."""
 
     def __call__(self, blocks: Iterator[Block]) -> Iterator[Block]:
-        return self.process(blocks)
+        return self.process(self._checked(blocks) if self.accepts is not None else blocks)
+
+    def _checked(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        for b in blocks:
+            if b.domain not in self.accepts:
+                self.check_input(b.domain)
+            yield b
 
 
 STAGES: dict[str, type[Stage]] = {}

@@ -16,6 +16,7 @@ import h5py
 import numpy as np
 
 from arrayproc.chain.block import Block, Pose
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.io.atomic import AtomicH5Writer
@@ -288,9 +289,9 @@ class Recording:
                     seg = np.concatenate(
                         [seg, np.zeros((nfft - n_valid, self.n_channels), dtype=dtype)])
                 t0 = s / self.fs
-                yield Block(seg, ("time", "channel"), t0, nfft / self.fs, self.fs,
+                yield Block(seg, Domain.TIME, t0, nfft / self.fs, self.fs,
                             self.positions, poses[j - k],
-                            index=first_index + j, meta={"n_valid": n_valid, "sample0": s})
+                            index=first_index + j, meta=TimeMeta(s, n_valid))
             k = kk
 
     # -- lifetime ------------------------------------------------------------------------

@@ -16,11 +16,10 @@ import numpy as np
 from scipy.signal import get_window
 
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, SnapshotMeta
 from arrayproc.dsp import fft
 from arrayproc.dsp.framing import FrameBuffer
 from arrayproc.errors import ConfigError
-
-SPECTRA_DOMAIN = ("snapshot", "freq", "channel")
 
 
 def uniform_line(positions: np.ndarray, tol: float = 1e-3) -> tuple[np.ndarray, float]:
@@ -94,9 +93,7 @@ class SpectraFramer:
         return self._bins
 
     def push(self, b: Block) -> Block | None:
-        n_valid = b.meta.get("n_valid", b.data.shape[0])
-        frames, starts = self._fb.push(b.data[:n_valid],
-                                       int(b.meta.get("sample0", round(b.t0 * b.fs))))
+        frames, starts = self._fb.push(b.data[:b.meta.n_valid], b.meta.sample0)
         if frames.shape[0] == 0:
             return None
         bins = self._select(b.fs)
@@ -114,11 +111,10 @@ class SpectraFramer:
             pos = np.repeat(pose.position[None], k, 0) if pose else np.zeros((k, 2))
             hd = np.full(k, pose.heading if pose else 0.0)
             spd = np.full(k, pose.speed if pose else 0.0)
-        out = Block(x.astype(np.complex64, copy=False), SPECTRA_DOMAIN, starts[0] / b.fs,
+        out = Block(x.astype(np.complex64, copy=False), Domain.SPECTRA, starts[0] / b.fs,
                     (starts[-1] - starts[0] + self.nfft) / b.fs, b.fs, b.positions, b.pose,
                     self.freqs, None, self.index,
-                    {"times": times, "starts": starts, "headings": hd, "positions_xy": pos,
-                     "speeds": spd, "nfft": self.nfft, "hop": self.hop, "window": self.window,
-                     "df": b.fs / self.nfft})
+                    SnapshotMeta(times, hd, self.nfft, self.hop, self.window, b.fs / self.nfft,
+                                 starts=starts, positions_xy=pos, speeds=spd))
         self.index += x.shape[0]
         return out

@@ -46,7 +46,7 @@ class _Collect(Stage):
     def process(self, blocks):
         self.seen = []
         for i, b in enumerate(blocks):
-            self.seen.append(b.meta["sample0"])
+            self.seen.append(b.meta.sample0)
             if (i + 1) % self.every == 0:
                 yield b
 

@@ -32,16 +32,16 @@ def test_write_read_identical_and_blocks_tile(tmp_path_factory, n, ch, nfft, hop
         heads = []
         for k, b in enumerate(blocks):
             s = k * hop
-            assert b.meta["sample0"] == s
+            assert b.meta.sample0 == s
             assert b.data.shape == (nfft, ch)
-            nv = b.meta["n_valid"]
+            nv = b.meta.n_valid
             assert np.array_equal(b.data[:nv], x[s:s + nfft])
             assert not b.data[nv:].any()
             assert b.t0 == pytest.approx(s / r.fs)
             heads.append(b.data[:nv] if k == len(blocks) - 1 else b.data[:hop])
         assert np.array_equal(np.concatenate(heads), x)
-        assert blocks[-1].meta["sample0"] + nfft >= n  # the last block reaches the end
-        assert len(blocks) == 1 or blocks[-2].meta["sample0"] + nfft < n
+        assert blocks[-1].meta.sample0 + nfft >= n  # the last block reaches the end
+        assert len(blocks) == 1 or blocks[-2].meta.sample0 + nfft < n
 
 
 def test_blocks_cross_slab_boundaries(tmp_path, monkeypatch, rng):

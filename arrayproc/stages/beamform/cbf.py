@@ -49,6 +49,7 @@ from scipy.signal import get_window
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, SnapshotMeta
 from arrayproc.dsp import fft, workers
 from arrayproc.dsp.blas_threads import set_local_threads
 from arrayproc.dsp.shading import KINDS as SHADINGS
@@ -182,6 +183,8 @@ class CBF(Stage):
     """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
 
     kind = "cbf"
+    accepts = frozenset({Domain.TIME})
+    produces = Domain.BEAMS
     params = {
         "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive),
         "hop": Param("int", 0, "samples between snapshots (0: nfft/2)"),
@@ -221,7 +224,7 @@ class CBF(Stage):
     def _prepare(self, b: Block) -> None:
         """(Re)build the bin selection and steering matrix for this block's fs and positions."""
         is_complex = np.iscomplexobj(b.data)
-        fc = float(b.meta.get("fc", 0.0)) if is_complex else 0.0
+        fc = float(b.meta.fc) if is_complex else 0.0
         key = (b.fs, is_complex, fc, b.positions.shape, b.positions.tobytes(),
                self.ctx.sound_speed)
         if key == self._key:
@@ -473,13 +476,12 @@ class CBF(Stage):
             times = (st + 0.5 * nfft) / fs
             heading = last.pose.heading if last.pose is not None else 0.0
             headings = self._headings(times, heading)
-            out = Block(y, ("snapshot", "freq", "beam"), st[0] / fs,
+            out = Block(y, Domain.BEAMS, st[0] / fs,
                         (st[-1] - st[0] + nfft) / fs, fs, last.positions,
                         last.pose, self.freqs, self.beam_axis, index,
-                        {"times": times, "headings": headings, "starts": st,
-                         "nfft": nfft, "hop": hop, "window": self.window,
-                         "shading": self.shading, "beam_mode": self.beam_mode,
-                         "df": fs / nfft})
+                        SnapshotMeta(times, headings, nfft, hop, self.window, fs / nfft,
+                                     starts=st, shading=self.shading,
+                                     beam_mode=self.beam_mode))
             index += y.shape[0]
             return out
 
@@ -503,9 +505,6 @@ class CBF(Stage):
             return slot, 0
 
         for b in blocks:
-            if b.domain != ("time", "channel"):
-                raise ConfigError(f"stage {self.name!r}: needs time-domain input, got "
-                                  f"{b.domain}")
             if last is not None and (b.positions.shape != last.positions.shape
                                      or not np.array_equal(b.positions, last.positions)
                                      or b.fs != last.fs or np.iscomplexobj(b.data)
@@ -516,8 +515,8 @@ class CBF(Stage):
                 end = None
             self._prepare(b)
             last = b
-            x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
-            s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
+            x = b.data[: b.meta.n_valid]
+            s0 = b.meta.sample0
             if end is None or end != s0:  # start, or a gap in the stream
                 if starts:
                     yield emit()

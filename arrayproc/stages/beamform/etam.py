@@ -33,6 +33,7 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, SnapshotMeta, Synthetic
 from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform import _sa_kernels as ks
 from arrayproc.stages.beamform.ibf import element_spectra, line_geometry, rule_snapshot_seconds
@@ -51,6 +52,9 @@ def cone_axis(beams: dict) -> np.ndarray:
 
 class _SyntheticAperture(Stage):
     """Sliding-window coherent combination of sub-aperture beams (shared by psas and etam)."""
+
+    accepts = frozenset({Domain.TIME, Domain.SPECTRA})
+    produces = Domain.BEAMS
 
     rule = ""
     params = {
@@ -108,10 +112,11 @@ class _SyntheticAperture(Stage):
                     ring = np.empty((self.snapshots, self._u.size, freqs.size), np.complex64)
                     slot = 0
                 ring[slot] = sub.T  # beam-major for the combination kernel
-                hd = float(spec.meta["headings"][s])
-                cur = {"x": x, "slot": slot, "t": float(spec.meta["times"][s]),
-                       "t0": float(spec.meta["starts"][s]) / spec.fs,
-                       "pos": np.asarray(spec.meta["positions_xy"][s], float),
+                m = spec.meta
+                hd = float(m.headings[s])
+                cur = {"x": x, "slot": slot, "t": float(m.times[s]),
+                       "t0": float(m.starts[s]) / spec.fs,
+                       "pos": np.asarray(m.positions_xy[s], float),
                        "heading": hd, "dx": dx}
                 if window:
                     prev = window[-1]
@@ -124,16 +129,13 @@ class _SyntheticAperture(Stage):
                     continue
                 y = self.combine(ring, window, freqs, c)
                 times = np.array([window[-1]["t"]])
-                yield Block(y[None], ("snapshot", "freq", "beam"), window[0]["t0"],
-                            window[-1]["t0"] - window[0]["t0"] + spec.meta["nfft"] / spec.fs,
+                yield Block(y[None], Domain.BEAMS, window[0]["t0"],
+                            window[-1]["t0"] - window[0]["t0"] + m.nfft / spec.fs,
                             spec.fs, spec.positions, spec.pose, spec.freqs, self.cone, index,
-                            {"times": times, "headings": np.array([hd]),
-                             "starts": np.array([spec.meta["starts"][s]]),
-                             "nfft": spec.meta["nfft"], "hop": spec.meta["hop"],
-                             "window": spec.meta["window"], "shading": "none",
-                             "beam_mode": "cone", "df": spec.meta["df"],
-                             "synthetic": {"snapshots": self.snapshots, "rule": self.kind,
-                                           "window_start": window[0]["t"]}})
+                            SnapshotMeta(times, np.array([hd]), m.nfft, m.hop, m.window, m.df,
+                                         starts=np.array([m.starts[s]]),
+                                         synthetic=Synthetic(self.snapshots, self.kind,
+                                                             window[0]["t"])))
                 index += 1
 
     def combine(self, ring: np.ndarray, window: deque, freqs: np.ndarray,

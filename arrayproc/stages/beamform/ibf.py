@@ -23,9 +23,10 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
 from arrayproc.errors import ConfigError
-from arrayproc.stages._common import SPECTRA_DOMAIN, SpectraFramer, snapshot_seconds, uniform_line
+from arrayproc.stages._common import SpectraFramer, snapshot_seconds, uniform_line
 from arrayproc.stages.beamform import _sa_kernels as ks
 
 
@@ -185,6 +186,8 @@ class IBF(Stage):
     """Inverse beamforming, the coherent onion peeler (thesis 2.2.3.3); see module doc."""
 
     kind = "ibf"
+    accepts = frozenset({Domain.TIME, Domain.SPECTRA})
+    produces = Domain.SPECTRA
     params = {
         "max_sources": Param("int", 3, "plane waves removed per bin at most", check=positive),
         "stop_db": Param("float", 3.0, "stop when the loudest beam is less than this above the "
@@ -223,7 +226,7 @@ class IBF(Stage):
         data = spec.data.copy()
         rows: dict[str, list[float]] = {k: [] for k in ("time", "cone_deg", "level_db", "snr_db",
                                                         "freq_lo", "freq_hi")}
-        nfft = spec.meta["nfft"]
+        nfft = spec.meta.nfft
         for s in range(data.shape[0]):
             res, removed = onion_peel(spec.data[s][:, order], spec.freqs, x, dx, c,
                                       self.max_sources, self.stop_db,
@@ -233,7 +236,7 @@ class IBF(Stage):
             for r in removed:
                 # In-band mean square of the wave at an element (Parseval, one-sided).
                 ms = 2.0 * float(np.sum(np.abs(r["amp"]) ** 2)) / nfft**2
-                rows["time"].append(float(spec.meta["times"][s]))
+                rows["time"].append(float(spec.meta.times[s]))
                 rows["cone_deg"].append(r["cone_deg"])
                 rows["level_db"].append(10 * np.log10(max(ms, 1e-300) / 1e-12))
                 rows["snr_db"].append(r["snr_db"])
@@ -278,13 +281,13 @@ def element_spectra(stage: Stage, blocks: Iterator[Block]) -> Iterator[Block]:
     :func:`make_framer`), spectra blocks pass as they are."""
     framer: SpectraFramer | None = None
     for b in blocks:
-        if b.domain == ("time", "channel"):
+        if b.domain is Domain.TIME:
             if framer is None:
                 framer = make_framer(stage, b)
             spec = framer.push(b)
             if spec is not None:
                 yield spec
-        elif b.domain == SPECTRA_DOMAIN:
+        elif b.domain is Domain.SPECTRA:
             yield b
         else:
             raise ConfigError(f"stage {stage.name!r}: needs time or element-spectra input, "

@@ -33,6 +33,7 @@ from scipy.signal.windows import kaiser
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.dsp import fft
 from arrayproc.errors import ConfigError
 
@@ -112,6 +113,8 @@ class DFTFilter(Stage):
     """Tukey-windowed DFT band filter with decimation (thesis 3.2.1.1); see module doc."""
 
     kind = "dft_filter"
+    accepts = frozenset({Domain.TIME})
+    produces = Domain.TIME
     params = {
         "band": Param("band", doc="[lo, hi] Hz kept (Tukey window spans it)"),
         "taper": Param("float", 0.1, "Tukey α of the band window, 0..1"),
@@ -204,24 +207,19 @@ class DFTFilter(Stage):
             d = self.decimate
             fs_out = last.fs / d
             j0 = first_pos // d
-            meta = {"n_valid": y.shape[0], "sample0": j0, "band": list(self.band),
-                    "decimate": d}
-            if self.complex:
-                meta["fc"] = self.fc
-            return Block(y, ("time", "channel"), j0 / fs_out, y.shape[0] / fs_out, fs_out,
+            meta = TimeMeta(j0, y.shape[0], self.fc if self.complex else 0.0,
+                            (float(self.band[0]), float(self.band[1])))
+            return Block(y, Domain.TIME, j0 / fs_out, y.shape[0] / fs_out, fs_out,
                          last.positions, last.pose, index=index, meta=meta)
 
         for b in blocks:
-            if b.domain != ("time", "channel"):
-                raise ConfigError(f"stage {self.name!r}: needs time-domain input, got "
-                                  f"{b.domain}")
             if np.iscomplexobj(b.data):
                 raise ConfigError(f"stage {self.name!r}: needs a real time series")
             if self._fs != b.fs:
                 self._setup(b.fs, b.data.shape[1])
                 buf = None
-            n_valid = b.meta.get("n_valid", b.data.shape[0])
-            s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
+            n_valid = b.meta.n_valid
+            s0 = b.meta.sample0
             x = b.data[:n_valid]
             if buf is None or buf_start + buf.shape[0] != s0:  # first block or a gap
                 origin = -(-s0 // self.decimate) * self.decimate

@@ -33,6 +33,7 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.dsp.peaks import pick_peaks
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.errors import ConfigError
@@ -54,14 +55,14 @@ def received_level_offset_db(b: Block, broadband: bool) -> float:
     """
     m = b.meta
     n_h = b.positions.shape[0]
-    nfft = float(m.get("nfft", 1))
-    n_b = 1 if m.get("integration_mean") else int(m.get("snapshots", 1))
-    n_s = int(m.get("synthetic", {}).get("snapshots", 1)) if isinstance(
-        m.get("synthetic"), dict) else 1
+    nfft = float(m.nfft)
+    integ = m.integration
+    n_b = 1 if (integ is None or integ.mean) else integ.snapshots
+    n_s = m.synthetic.snapshots if m.synthetic is not None else 1
     off = 10 * np.log10(n_b * (n_h * nfft * n_s) ** 2 / 2.0)
     if broadband:
         from arrayproc.stages.beamform.cbf import time_window
-        off += 10 * np.log10(np.mean(time_window(str(m.get("window", "none")), int(nfft)) ** 2))
+        off += 10 * np.log10(np.mean(time_window(str(m.window), int(nfft)) ** 2))
     return float(off)
 
 
@@ -70,6 +71,7 @@ class Bearings(Stage):
     """Peak picking on BTR rows and LOFAR lines (products ``bearings``); see module doc."""
 
     kind = "bearings"
+    accepts = frozenset({Domain.POWER})
     params = {
         "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)"),
         "broadband": Param("bool", True, "pick peaks on the broadband (BTR) beam power"),
@@ -127,9 +129,8 @@ class Bearings(Stage):
                 idx = band_bins(b.freqs, self.band, f"stage {self.name!r}")
                 out = self.products("bearings")
             times = snapshot_times(b)
-            heads = np.asarray(b.meta.get("headings", np.zeros(times.size)), float)
-            df = float(b.meta.get("df", np.median(np.diff(b.freqs)) if b.freqs.size > 1
-                                  else 0.0))
+            heads = np.asarray(b.meta.headings, float)
+            df = float(b.meta.df)
             rows: dict[str, list] = {k: [] for k in COLUMNS}
             lref = 10 * np.log10(self.ref**2)
             off_bb = received_level_offset_db(b, broadband=True)

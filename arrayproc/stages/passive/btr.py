@@ -17,6 +17,7 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.errors import ConfigError
 from arrayproc.stages.passive.integrate import check_power_block
 
@@ -41,7 +42,7 @@ def beam_columns(beams: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def snapshot_times(b: Block) -> np.ndarray:
-    return np.asarray(b.meta.get("times", np.full(b.data.shape[0], b.t_centre)), float)
+    return np.asarray(b.meta.times, float)
 
 
 @register
@@ -49,6 +50,7 @@ class BTR(Stage):
     """Broadband bearing-time record (products ``btr``); see module doc."""
 
     kind = "btr"
+    accepts = frozenset({Domain.POWER})
     params = {
         "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins)"),
         "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa)", check=positive),

@@ -17,12 +17,14 @@ sum is divided by N_B (an average power: Gamma of shape N_B and scale E|Ξ|²/N_
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 
 import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, Integration
 from arrayproc.dsp import workers
 from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform._kernels import abs2, power_sums
@@ -38,6 +40,8 @@ class Integrate(Stage):
     """Incoherent integration of N_B snapshots (thesis eq. 2.22); see module doc."""
 
     kind = "integrate"
+    accepts = frozenset({Domain.BEAMS, Domain.POWER})
+    produces = Domain.POWER
     params = {
         "snapshots": Param("int", 8, "N_B, snapshots per sum", check=positive),
         "mode": Param("str", "blockwise", "disjoint sums or a sliding sum",
@@ -63,18 +67,15 @@ class Integrate(Stage):
         index = 0
         count = 0  # running snapshot number when the input carries no sample grid
         for b in blocks:
-            if b.domain != ("snapshot", "freq", "beam"):
-                raise ConfigError(f"stage {self.name!r}: needs ('snapshot', 'freq', 'beam') "
-                                  f"blocks (from cbf), got {b.domain}")
             y = b.data
             if np.iscomplexobj(y):  # powers are taken inside the sums, never stored whole
                 y = np.ascontiguousarray(y, np.complex64)
             else:  # already powers: they join the carried-over rows
                 y = np.ascontiguousarray(y, np.float32)
-            times = np.asarray(b.meta.get("times", np.full(y.shape[0], b.t_centre)), float)
-            heads = np.asarray(b.meta.get("headings", np.zeros(y.shape[0])), float)
-            if "starts" in b.meta and b.meta.get("hop"):
-                ks = np.asarray(b.meta["starts"], np.int64) // int(b.meta["hop"])
+            times = np.asarray(b.meta.times, float)
+            heads = np.asarray(b.meta.headings, float)
+            if b.meta.starts is not None and b.meta.hop:
+                ks = np.asarray(b.meta.starts, np.int64) // int(b.meta.hop)
             else:
                 ks = count + np.arange(y.shape[0], dtype=np.int64)
             count = int(ks[-1]) + 1 if ks.size else count
@@ -110,13 +111,13 @@ class Integrate(Stage):
                 win_idx = starts[:, None] + np.arange(n)[None, :]
                 t_out = tb[win_idx].mean(axis=1)
                 h_out = _circ_mean_deg(hb[win_idx], axis=1)
-                meta = dict(b.meta)
-                meta.update(times=t_out, headings=h_out, snapshots=n, integration=self.mode,
-                            integration_mean=self.mean)
-                d = float(b.meta.get("nfft", 0)) / b.fs  # one snapshot's duration, s
+                meta = dataclasses.replace(b.meta, times=t_out, headings=h_out,
+                                           integration=Integration(n, self.mode, self.mean))
+                d = float(b.meta.nfft) / b.fs  # one snapshot's duration, s
                 t0 = float(tb[0] - 0.5 * d)
                 span = float(tb[win_idx[-1, -1]] - tb[0]) + d
-                yield b.replace(data=out, t0=t0, span=span, index=index, meta=meta)
+                yield b.replace(data=out, domain=Domain.POWER, t0=t0, span=span, index=index,
+                                meta=meta)
                 index += k
             used = k * step  # the rows not yet used are carried over, as powers
             rest_y = y[max(0, used - head.shape[0]):]
@@ -146,6 +147,6 @@ class Integrate(Stage):
 
 def check_power_block(stage: Stage, b: Block) -> None:
     """Raise a ConfigError naming ``stage`` unless ``b`` is a power block from ``integrate``."""
-    if b.domain != ("snapshot", "freq", "beam") or np.iscomplexobj(b.data):
+    if b.domain is not Domain.POWER or np.iscomplexobj(b.data):
         raise ConfigError(f"stage {stage.name!r}: needs power blocks from 'integrate', "
                           f"got {b.domain}")

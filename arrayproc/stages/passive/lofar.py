@@ -18,6 +18,7 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.errors import ConfigError
 from arrayproc.stages.passive.btr import band_bins, beam_columns, snapshot_times
@@ -47,6 +48,7 @@ class LOFAR(Stage):
     """Per-beam LOFAR-gram (products ``lofar``); see module doc."""
 
     kind = "lofar"
+    accepts = frozenset({Domain.POWER})
     params = {
         "beams": Param("any", "all", "\"all\" or a list of cone angles, deg",
                        check=_beams_check),

@@ -8,6 +8,7 @@ import numpy as np
 
 from arrayproc.chain import Param, Stage, register
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
 
 
@@ -21,6 +22,7 @@ class Power(Stage):
     """
 
     kind = "power"
+    accepts = frozenset({Domain.TIME})
     params = {
         "band": Param("band", None, "frequency band [lo, hi] Hz; whole band when absent"),
         "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa for data in Pa)"),
@@ -29,7 +31,7 @@ class Power(Stage):
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = self.products("power")
         for b in blocks:
-            n_valid = b.meta.get("n_valid", b.data.shape[0])
+            n_valid = b.meta.n_valid
             x = b.data[:n_valid]
             spec = fft.rfft(x, axis=0)
             f = np.fft.rfftfreq(n_valid, 1.0 / b.fs)

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform import _kernels as kb
@@ -33,8 +34,8 @@ def blocks_of(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,)):
     i, k = 0, 0
     while i < x.shape[0]:
         s = min(sizes[k % len(sizes)], x.shape[0] - i)
-        yield Block(x[i:i + s].astype(np.float32), ("time", "channel"), i / fs, s / fs, fs,
-                    positions, None, meta={"n_valid": s, "sample0": i})
+        yield Block(x[i:i + s].astype(np.float32), Domain.TIME, i / fs, s / fs, fs,
+                    positions, None, meta=TimeMeta(i, s))
         i += s
         k += 1
 
@@ -148,7 +149,7 @@ def test_matches_numpy_reference_across_blocks(rng):
                             window="hann", band=[300.0, 1800.0], batch=5)
     n_frames = (9000 - 512) // 384 + 1  # 23
     assert [o.data.shape[0] for o in out] == [5, 5, 5, 5, n_frames - 20]
-    starts = np.concatenate([o.meta["starts"] for o in out])
+    starts = np.concatenate([o.meta.starts for o in out])
     assert np.array_equal(starts, 384 * np.arange(y.shape[0]))
     w = time_window("hann", 512)
     for s in (0, 7, y.shape[0] - 1):
@@ -156,7 +157,7 @@ def test_matches_numpy_reference_across_blocks(rng):
                                       (300.0, 1800.0), C, w)
         assert np.allclose(f, stage.freqs)
         assert np.max(np.abs(y[s] - ref)) < 2e-5 * np.max(np.abs(ref))
-    times = np.concatenate([o.meta["times"] for o in out])
+    times = np.concatenate([o.meta.times for o in out])
     assert np.allclose(times, (starts + 256) / fs)
 
 
@@ -191,8 +192,8 @@ def test_complex_baseband_input_equals_real_path(rng):
     spec[f <= 0] = 0  # keep the positive frequencies only
     fc = 64 * fs / nfft
     xa = np.fft.ifft(spec, axis=0) * np.exp(-2j * np.pi * fc * np.arange(nfft) / fs)[:, None]
-    blk = Block(xa.astype(np.complex64), ("time", "channel"), 0.0, nfft / fs, fs, pos, None,
-                meta={"n_valid": nfft, "sample0": 0, "fc": fc})
+    blk = Block(xa.astype(np.complex64), Domain.TIME, 0.0, nfft / fs, fs, pos, None,
+                meta=TimeMeta(0, nfft, fc))
     band = [fc - 100, fc + 100]
     st_c = CBF(nfft=nfft, hop=nfft, window="none", band=band)
     yc = next(iter(st_c.process(iter([blk]))))
@@ -487,13 +488,13 @@ def test_gap_in_the_stream_starts_a_new_frame_run_on_the_absolute_grid(rng):
     def blocks():
         for a, b, s0 in ((0, 900, 0), (900, gap_at, 900), (gap_at, 3100, gap_at + gap),
                          (3100, 4000, 3100 + gap)):
-            yield Block(x[a:b], ("time", "channel"), s0 / fs, (b - a) / fs, fs, pos, None,
-                        meta={"n_valid": b - a, "sample0": s0})
+            yield Block(x[a:b], Domain.TIME, s0 / fs, (b - a) / fs, fs, pos, None,
+                        meta=TimeMeta(s0, b - a))
 
     stage = CBF(nfft=nfft, hop=hop, window="hann", band=[100.0, 900.0], batch=5)
     out = list(stage.process(blocks()))
     y = np.concatenate([o.data for o in out])
-    starts = np.concatenate([o.meta["starts"] for o in out])
+    starts = np.concatenate([o.meta.starts for o in out])
     assert np.all(starts % hop == 0)
     before = starts[starts < gap_at]
     after = starts[starts >= gap_at + gap]

@@ -100,7 +100,7 @@ def test_etam_snapshot_length_follows_the_speed(perturbed):
     """T_B = (N_H − 1) δx / (2U) (eq. 2.52) = 4 s here: 4096 samples at 1024 Hz."""
     out = run_stage(ETAM(snapshots=2, band=[246.0, 254.0],
                          beams={"start": 90.0, "stop": 90.0, "count": 1}), perturbed)
-    assert out[0].meta["nfft"] == 4096 and out[0].meta["synthetic"]["rule"] == "etam"
+    assert out[0].meta.nfft == 4096 and out[0].meta.synthetic.rule == "etam"
 
 
 def _steer(freqs, x, cone):

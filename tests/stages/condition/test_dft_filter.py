@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from scipy import signal
 
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import ConfigError
 from arrayproc.stages.condition.dft_filter import DFTFilter, tukey_band
 
@@ -17,9 +18,9 @@ def blocks_of(x: np.ndarray, fs: float, sizes, s0: int = 0):
     i, k = 0, 0
     while i < x.shape[0]:
         n = min(sizes[k % len(sizes)], x.shape[0] - i)
-        yield Block(x[i:i + n].astype(np.float32), ("time", "channel"), (s0 + i) / fs, n / fs,
+        yield Block(x[i:i + n].astype(np.float32), Domain.TIME, (s0 + i) / fs, n / fs,
                     fs, np.zeros((x.shape[1], 3)), None,
-                    meta={"n_valid": n, "sample0": s0 + i})
+                    meta=TimeMeta(s0 + i, n))
         i += n
         k += 1
 
@@ -77,11 +78,11 @@ def test_streaming_equals_scipy_convolution_on_the_whole_signal(rng, decimate, c
     assert y.shape == ref.shape
     assert np.max(np.abs(y - ref)) < 1e-5 * np.max(np.abs(ref))
     # blocks tile the output sample grid without gaps or overlaps
-    s0 = [o.meta["sample0"] for o in out]
+    s0 = [o.meta.sample0 for o in out]
     n = [o.data.shape[0] for o in out]
     assert s0[0] == 0 and all(a + b == c for a, b, c in zip(s0, n, s0[1:]))
     assert all(o.fs == fs / decimate for o in out)
-    assert all(abs(o.t0 - o.meta["sample0"] * decimate / fs) < 1e-12 for o in out)
+    assert all(abs(o.t0 - o.meta.sample0 * decimate / fs) < 1e-12 for o in out)
 
 
 @settings(max_examples=10, deadline=None)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import numpy as np
 import pytest
 
 from arrayproc.chain import RunContext
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.dsp.peaks import parabolic_vertex, pick_peaks
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
@@ -62,13 +64,13 @@ def run_bearings(x, fs, pos, heading, tmp_path, **kw):
         blocks = []
         for i in range(0, x.shape[0], 4096):
             n = min(4096, x.shape[0] - i)
-            blocks.append(Block(x[i:i + n].astype(np.float32), ("time", "channel"), i / fs,
-                                n / fs, fs, pos, None, meta={"n_valid": n, "sample0": i}))
+            blocks.append(Block(x[i:i + n].astype(np.float32), Domain.TIME, i / fs,
+                                n / fs, fs, pos, None, meta=TimeMeta(i, n)))
 
         def with_heading(bs):
             for b in bs:  # no recording: give the headings the chain would take from /nav
-                b.meta["headings"] = np.full(b.data.shape[0], heading)
-                yield b
+                heads = np.full(b.data.shape[0], heading)
+                yield b.replace(meta=dataclasses.replace(b.meta, headings=heads))
         list(brg.process(with_heading(integ.process(cbf.process(iter(blocks))))))
     return read_products(out)["bearings"]
 

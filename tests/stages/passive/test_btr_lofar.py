@@ -7,6 +7,7 @@ import pytest
 
 from arrayproc.chain import build_chain, run_chain
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, Integration, SnapshotMeta
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter, read_products
@@ -50,10 +51,10 @@ def test_tpsw_matches_reference_and_normalises_noise(rng):
 
 
 def power_blocks(p: np.ndarray, freqs, beams, times):
-    yield Block(p, ("snapshot", "freq", "beam"), float(times[0]), 1.0, 1000.0,
+    yield Block(p, Domain.POWER, float(times[0]), 1.0, 1000.0,
                 np.zeros((2, 3)), None, np.asarray(freqs, float), np.asarray(beams, float),
-                meta={"times": np.asarray(times, float), "headings": np.zeros(len(times)),
-                      "df": 1.0})
+                meta=SnapshotMeta(np.asarray(times, float), np.zeros(len(times)), 1000, 1000,
+                                  "none", 1.0, integration=Integration(1, "blockwise", False)))
 
 
 def test_btr_and_lofar_rows(tmp_path, rng):

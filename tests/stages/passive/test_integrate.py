@@ -8,6 +8,7 @@ from scipy import stats
 
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
+from arrayproc.chain.domains import Domain, SnapshotMeta, TimeMeta
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.cbf import CBF
@@ -23,10 +24,11 @@ def snapshot_blocks(y: np.ndarray, sizes, times=None, headings=None):
     headings = np.zeros(s_n) if headings is None else headings
     while i < s_n:
         n = min(sizes[k % len(sizes)], s_n - i)
-        yield Block(y[i:i + n], ("snapshot", "freq", "beam"), float(times[i]), 1.0, 100.0,
+        dom = Domain.BEAMS if np.iscomplexobj(y) else Domain.POWER
+        yield Block(y[i:i + n], dom, float(times[i]), 1.0, 100.0,
                     np.zeros((2, 3)), None, np.arange(y.shape[1], dtype=float),
                     np.arange(y.shape[2], dtype=float),
-                    meta={"times": times[i:i + n], "headings": headings[i:i + n], "nfft": 100})
+                    meta=SnapshotMeta(times[i:i + n], headings[i:i + n], 100, 0, "none", 1.0))
         i += n
         k += 1
 
@@ -43,8 +45,8 @@ def test_sums_match_direct_computation(rng, mode, sizes):
     stage = Integrate(snapshots=n, mode=mode)
     out = list(stage.process(snapshot_blocks(y, sizes, times, heads)))
     got = np.concatenate([o.data for o in out])
-    t = np.concatenate([o.meta["times"] for o in out])
-    h = np.concatenate([o.meta["headings"] for o in out])
+    t = np.concatenate([o.meta.times for o in out])
+    h = np.concatenate([o.meta.headings for o in out])
     p = np.abs(y) ** 2
     step = n if mode == "blockwise" else 1
     starts = np.arange(0, s_n - n + 1, step)
@@ -94,8 +96,8 @@ def test_noise_after_integration_is_gamma_n_b(n_b):
     cbf = CBF(nfft=nfft, hop=nfft, window="none", band=[8.0, 500.0],
               beams={"start": 75.0, "stop": 75.0, "count": 1})
     integ = Integrate(snapshots=n_b, mode="blockwise")
-    blocks = (Block(x[i:i + 4096].astype(np.float32), ("time", "channel"), i / fs, 4096 / fs,
-                    fs, pos, None, meta={"n_valid": 4096, "sample0": i})
+    blocks = (Block(x[i:i + 4096].astype(np.float32), Domain.TIME, i / fs, 4096 / fs,
+                    fs, pos, None, meta=TimeMeta(i, 4096))
               for i in range(0, x.shape[0], 4096))
     out = np.concatenate([o.data for o in integ.process(cbf.process(blocks))])
     assert out.shape[0] == n_out
@@ -115,10 +117,12 @@ def test_rejects_time_domain_input_and_bad_keys():
         Integrate(mode="running")
     with pytest.raises(ConfigError, match="'snapshots'"):
         build_chain({"stage": [{"type": "integrate", "snapshots": 0}]})
-    blk = Block(np.zeros((4, 2), np.float32), ("time", "channel"), 0.0, 1.0, 4.0,
-                np.zeros((2, 3)))
-    with pytest.raises(ConfigError, match="cbf"):
-        list(Integrate().process(iter([blk])))
+    blk = Block(np.zeros((4, 2), np.float32), Domain.TIME, 0.0, 1.0, 4.0,
+                np.zeros((2, 3)), meta=TimeMeta(0, 4))
+    with pytest.raises(ConfigError, match="needs beams or power blocks"):
+        list(Integrate()(iter([blk])))
+    with pytest.raises(ConfigError, match="needs beams or power blocks, but its input yields time"):
+        build_chain({"stage": [{"type": "integrate"}]})
 
 
 def test_blockwise_groups_sit_on_the_absolute_snapshot_grid(rng):
@@ -131,15 +135,15 @@ def test_blockwise_groups_sit_on_the_absolute_snapshot_grid(rng):
     def blocks(first):
         for a in range(first, 20, 5):
             e = min(20, a + 5)
-            yield Block(y[a:e], ("snapshot", "freq", "beam"), a * 0.1, 0.5, 1000.0,
+            yield Block(y[a:e], Domain.BEAMS, a * 0.1, 0.5, 1000.0,
                         np.zeros((2, 3)), None, np.arange(2.0), np.arange(3.0),
-                        meta={"times": np.arange(a, e) * 0.1, "headings": np.zeros(e - a),
-                              "starts": np.arange(a, e) * hop, "hop": hop, "nfft": 200})
+                        meta=SnapshotMeta(np.arange(a, e) * 0.1, np.zeros(e - a), 200, hop,
+                                          "none", 5.0, starts=np.arange(a, e) * hop))
 
     whole = list(Integrate(snapshots=n).process(blocks(0)))
     part = list(Integrate(snapshots=n).process(blocks(3)))
-    tw = np.concatenate([o.meta["times"] for o in whole])
-    tp = np.concatenate([o.meta["times"] for o in part])
+    tw = np.concatenate([o.meta.times for o in whole])
+    tp = np.concatenate([o.meta.times for o in part])
     assert np.allclose(tw[1:], tp)  # the segment lost only the group it started inside
     assert np.allclose(np.concatenate([o.data for o in whole])[1:],
                        np.concatenate([o.data for o in part]))
