@@ -32,7 +32,8 @@ _TWO_PI = 2.0 * np.pi
 
 @njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def atan2(y: float, x: float) -> float:
-    """Four-quadrant arc tangent of y/x (rad), as ``np.arctan2(y, x)`` (to a few ulp)."""
+    """Four-quadrant arc tangent of y/x (rad), as ``np.arctan2(y, x)`` (to a few ulp for
+    normal floats; subnormal inputs lose precision)."""
     ax = abs(x)
     ay = abs(y)
     mx = max(ax, ay)

@@ -175,13 +175,16 @@ def solve_compact(times: np.ndarray, bearings_rad: np.ndarray, array_xy: np.ndar
     fim = compact_fim(q, speed_mps, tau, a, sig, correlation_s, sigma_speed_mps)
     crlb_p, _ = crlb_from_fim(fim)
     # estimator covariance: the bearing information scaled by the residual variance factor
-    data = fim.copy()
-    if fim.shape[0] == 4:
-        data[3, 3] -= 1.0 / sigma_speed_mps**2
-    data = data / s2
-    if fim.shape[0] == 4:
-        data[3, 3] += 1.0 / sigma_speed_mps**2
-    cov_p, _ = crlb_from_fim(data)
+    if s2 > 0:
+        data = fim.copy()
+        if fim.shape[0] == 4:
+            data[3, 3] -= 1.0 / sigma_speed_mps**2
+        data = data / s2
+        if fim.shape[0] == 4:
+            data[3, 3] += 1.0 / sigma_speed_mps**2
+        cov_p, _ = crlb_from_fim(data)
+    else:  # a perfect fit
+        cov_p = np.zeros_like(fim)
     state = np.array([q[0], q[1], speed_mps * np.sin(q[2]), speed_mps * np.cos(q[2])])
     crlb = state_covariance(q, speed_mps, crlb_p)
     return TmaSolution(

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...geo.tdoa import predicted_delays
 from ._kernels import td_cost_population
 from .fim import td_fim, td_jacobian
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
@@ -53,8 +54,8 @@ def delay_model(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
     """
     x = np.asarray(state, float)
     p = x[None, :2] + np.asarray(tau, float)[:, None] * x[None, 2:]
-    r = np.linalg.norm(p[:, None, :] - np.asarray(elem, float), axis=-1)
-    return (r - r[:, ref:ref + 1]) / sound_speed
+    return predicted_delays(p[:, None, :], np.asarray(elem, float)[:, None], ref,
+                            sound_speed)[:, 0]
 
 
 def plane_wave_directions(delays_s: np.ndarray, elements_xy: np.ndarray, ref: int,
