@@ -1,8 +1,8 @@
 """Monte Carlo evaluation of the bearings-only trackers on the L-R paper's section-V scenario.
 
-Runs are independent and executed in parallel inside one numba kernel
-(:func:`arrayproc.track._kernels.run_montecarlo`); the noise of every run comes from one
-seeded generator, so the same seed gives the same bytes.
+Runs are independent and executed by the fused L-R kernel
+(:func:`arrayproc.track.manage.lr.run_lr_batch`) on a thread pool; the noise of every run comes
+from one seeded generator, so the same seed gives the same bytes.
 
 Scenario (L-R paper section V; Ristic, Arulampalam & Gordon 2003 ch. 6): T = 1 min for 30 min
 (31 bearings, t = 0 … 30 min); observer at the origin, 5 kn on 140°, turning to 20° at 30°/min
@@ -22,12 +22,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from arrayproc.geo.kinematics import KNOT, Segment, Trajectory, true_bearing
-from arrayproc.track import _kernels as kc
+from arrayproc.geo.angles import true_bearing, wrap_pi
+from arrayproc.geo.kinematics import KNOT, Segment, Trajectory
 from arrayproc.track.crlb import bearings_only_crlb, polar_prior_covariance, position_rmse_bound
 from arrayproc.track.filters import make_filter
 from arrayproc.track.init import TrackPrior
-from arrayproc.track.models import make_model
+from arrayproc.track.manage.lr import run_lr_batch
+from arrayproc.track.models.motion import make_model
 
 TRACK_BOUND_M = 1000.0
 
@@ -96,7 +97,7 @@ class LRScenario:
         out[:, 0] = g["rel"][0]
         for k in range(1, K):
             T = self.times[k] - self.times[k - 1]
-            Lq = np.linalg.cholesky(model.process_noise(T))
+            Lq = np.linalg.cholesky(model.covariance(T))
             w = rng.standard_normal((runs, n)) @ Lq.T
             prev = out[:, k - 1]
             absx = prev[:, :4] + own[k - 1]
@@ -131,8 +132,8 @@ class LRScenario:
         rel = self.truth(runs, rng)
         theta = np.arctan2(rel[..., 0], rel[..., 1])
         nu = rng.standard_normal(theta.shape) * math.radians(self.sigma_deg)
-        y1 = kc_wrap(theta + nu)
-        y2 = kc_wrap(2.0 * g["heading"][None, :] - theta - nu)
+        y1 = wrap_pi(theta + nu)
+        y2 = wrap_pi(2.0 * g["heading"][None, :] - theta - nu)
         p = self.prior
         draws = np.empty((runs, 3))
         draws[:] = (p.range_m, p.speed_mps, 0.0)
@@ -142,10 +143,6 @@ class LRScenario:
             # a negative draw of range or speed flips the direction: keep them positive
             draws[:, :2] = np.abs(draws[:, :2])
         return y1, y2, draws, rel
-
-
-def kc_wrap(a: np.ndarray) -> np.ndarray:
-    return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
 
 
 @dataclass
@@ -194,17 +191,16 @@ def run_case(scn: LRScenario, filter_name: str, resolved: bool, runs: int, seed:
     the number of usable cores). The result does not depend on the number of threads."""
     g = scn.geometry()
     model = make_model(scn.model_name)
-    filt = make_filter(filter_name, model, scn.sigma_deg, **(filter_params or {}))
+    filt = make_filter(filter_name, **(filter_params or {}))
     y1, y2, draws, rel = meas if meas is not None else scn.measurements(runs, seed)
     zs = np.stack([y1, y2], axis=-1) if resolved else y1[..., None]
     zs = np.ascontiguousarray(zs)
-    kind, U, wm, wc, Up, wmp, wcp = filt.kernel_args()
     prior = scn.prior.as_array()
     prior[4] = math.radians(scn.sigma_deg)
     t0 = time.perf_counter()
-    est, wts, status = _run_threads(kind, model.code, zs, g["times"], g["own"], filt.sigma,
-                                    model.q1, model.q2, prior, np.ascontiguousarray(draws),
-                                    (U, wm, wc, Up, wmp, wcp), model.dim, threads)
+    est, wts, status = _run_threads(filt, model, zs, g["times"], g["own"],
+                                    math.radians(scn.sigma_deg), prior,
+                                    np.ascontiguousarray(draws), threads)
     seconds = time.perf_counter() - t0
     truth = rel[..., :4]
     err = est - truth
@@ -230,12 +226,12 @@ def default_threads() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _run_threads(kind, model_code, zs, times, own, sigma, q1, q2, prior, draws, pts, n,
-                 threads):
+def _run_threads(filt, model, zs, times, own, sigma, prior, draws, threads):
     """Split the runs into contiguous chunks and run the GIL-free kernel on a thread pool."""
     R, K, n_hyp = zs.shape
     est = np.empty((R, K, 4))
     wts = np.empty((R, K, n_hyp))
+    n = model.ndim
     Pfin = np.empty((R, n, n))
     status = np.empty(R, dtype=np.int64)
     nthr = max(1, min(threads or default_threads(), R))
@@ -244,9 +240,8 @@ def _run_threads(kind, model_code, zs, times, own, sigma, q1, q2, prior, draws, 
     def work(i):
         a, b = bounds[i], bounds[i + 1]
         if b > a:
-            kc.run_montecarlo(kind, model_code, n_hyp, times, zs[a:b], own, sigma, q1, q2,
-                              prior, draws[a:b], *pts, n, est[a:b], wts[a:b], Pfin[a:b],
-                              status[a:b])
+            run_lr_batch(filt, model, sigma, times, zs[a:b], own, prior, draws[a:b], est[a:b],
+                         wts[a:b], Pfin[a:b], status[a:b])
 
     if nthr == 1:
         for i in range(len(bounds) - 1):

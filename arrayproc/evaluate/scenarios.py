@@ -22,7 +22,8 @@ import numpy as np
 from arrayproc.acoustics.source_level import ROSS_SURFACE_SHIP, SourceLevelModel, received_level
 from arrayproc.acoustics.tl.table import TLTable, load_default_table
 from arrayproc.errors import ConfigError
-from arrayproc.geo.kinematics import KNOT, Trajectory, course_to_velocity, true_bearing
+from arrayproc.geo.angles import true_bearing, wrap_2pi
+from arrayproc.geo.kinematics import KNOT, Trajectory, course_to_velocity
 from arrayproc.track.crlb import bearings_only_crlb, polar_prior_covariance
 
 __all__ = ["SPLScenario", "SCENARIOS", "get_scenario", "ScenarioData"]
@@ -115,7 +116,7 @@ class SPLScenario:
                 d = x[:, :2] - obs
                 b_true = true_bearing(d[:, 0], d[:, 1])
                 h_l = received_level(x, obs, tl_fn, self.source_level)
-            bear[r] = np.rad2deg(np.mod(b_true + sb * rng.standard_normal(t.size), 2 * np.pi))
+            bear[r] = np.rad2deg(wrap_2pi(b_true + sb * rng.standard_normal(t.size)))
             lev[r] = h_l + self.sigma_level_data_db * rng.standard_normal(t.size)
         return ScenarioData(t, obs, truth if runs_truth is None else runs_truth, bear, lev)
 

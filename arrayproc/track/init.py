@@ -38,15 +38,36 @@ class TrackPrior:
                          math.radians(self.sigma_turn_deg_s)])
 
 
-def init_from_bearing(bearing_deg: float, own_state: np.ndarray, prior: TrackPrior,
-                      dim: int = 4) -> tuple[np.ndarray, np.ndarray]:
+def initial_state(bearing_rad: float, own_state: np.ndarray, prior: TrackPrior,
+                  dim: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Relative state and covariance from one bearing (Ristic et al. 2003, ch. 6):
     x = r̄ [sin θ, cos θ], ẋ = s̄ [sin c̄, cos c̄] − ẋ^o with c̄ = θ + π, covariances by
-    linearising the polar priors. ``own_state`` = observer [x, y, ẋ, ẏ]; ``dim`` 4 (CV) or
-    5 (CT, turn rate 0 ± σψ)."""
+    linearising the polar priors.
+
+    Parameters
+    ----------
+    bearing_rad : float
+        First bearing θ, rad.
+    own_state : (4,) array_like
+        Observer [x, y, ẋ, ẏ] (m, m/s).
+    prior : TrackPrior
+    dim : int
+        4 (CV) or 5 (CT, turn rate 0 ± σψ).
+
+    Returns
+    -------
+    x : (dim,) ndarray
+    P : (dim, dim) ndarray
+    """
     x = np.empty(dim)
     P = np.empty((dim, dim))
     p = prior.as_array()
-    kc.init_from_bearing(math.radians(bearing_deg), np.asarray(own_state, float), p[0], p[1],
-                         p[2], p[3], p[4], p[5], p[6], x, P, p[0], p[2], 0.0)
+    kc.init_from_bearing(float(bearing_rad), np.asarray(own_state, float), p[0], p[1], p[2],
+                         p[3], p[4], p[5], p[6], x, P, p[0], p[2], 0.0)
     return x, P
+
+
+def init_from_bearing(bearing_deg: float, own_state: np.ndarray, prior: TrackPrior,
+                      dim: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`initial_state` with the bearing in degrees."""
+    return initial_state(math.radians(bearing_deg), own_state, prior, dim)

@@ -26,13 +26,22 @@ Tracker TOML::
     bearings = "bearings"     # products group (default: the only group of kind bearings)
     nav = "rec.h5"            # optional: recording with /nav (default: the products' source)
     cone_gate = [20.0, 160.0] # optional: only rows with cone angles in [lo, hi] deg
-    level = "spl_db"          # optional (rpf): received levels from this bearings column
-    [tracker.params]          # filter parameters, e.g. alpha/beta/kappa, gh_order, likelihood
+    level = "spl_db"          # optional: received levels from this bearings column (any
+                              # filter but srf; level + bearing model, SPL paper eqs. 31-33)
+    [tracker.params]          # filter parameters, e.g. alpha/beta/kappa, gh_order, likelihood,
+                              # n_particles; and the level model's tl_table, src_depth_m,
+                              # rcv_depth_m, sigma_level_db, source_level
 
 One target is tracked: at each time the row with the highest ``snr_db`` (else ``level_db``) is
 used. With ``lr``, the two members of each port/starboard pair are assigned to the two
 hypotheses by continuity (:func:`assign_by_continuity`), so a target crossing the array's axis
 keeps its hypothesis.
+
+The runner only wires components: the configuration gives a motion model
+(:mod:`arrayproc.track.models.motion`), a measurement model (bearing, or level + bearing), a
+filter (:func:`arrayproc.track.filters.make_filter`) and the L-R resolver
+(:class:`arrayproc.track.manage.lr.LRResolver`); the navigation comes from
+:class:`arrayproc.io.recording.Recording` and :class:`arrayproc.geo.nav.Nav`.
 """
 
 from __future__ import annotations
@@ -44,15 +53,20 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from arrayproc.errors import ConfigError, FormatError
-from arrayproc.track import _kernels as kc
+from arrayproc.geo.angles import wrap_pi
+from arrayproc.geo.nav import Nav
 from arrayproc.track.filters import FILTERS, FilterDivergence, make_filter
-from arrayproc.track.init import TrackPrior, init_from_bearing
-from arrayproc.track.lr import LRResolver
-from arrayproc.track.models import Q1_PAPER, Q2_PAPER, make_model
+from arrayproc.track.init import TrackPrior, initial_state
+from arrayproc.track.manage.lr import LRResolver
+from arrayproc.track.models import _kernels as km
+from arrayproc.track.models.base import MeasurementModel, MotionModel
+from arrayproc.track.models.bearing import Bearing
+from arrayproc.track.models.level_bearing import LevelBearing
+from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
+from arrayproc.track.state import Context
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -102,9 +116,9 @@ def load_tracker_config(path: str) -> dict[str, Any]:
         if not isinstance(cfg["level"], str):
             raise ConfigError(f"{path}: tracker.level must name a bearings column, e.g. "
                               "'spl_db'")
-        if not getattr(FILTERS[cfg["filter"]], "uses_levels", False):
-            raise ConfigError(f"{path}: tracker.level needs a filter that uses levels "
-                              f"(rpf), not {cfg['filter']!r}")
+        if cfg["filter"] == "srf":
+            raise ConfigError(f"{path}: tracker.level needs a filter that takes any "
+                              "measurement model (the srf is bearings-only)")
     if "cone_gate" in cfg:
         g = cfg["cone_gate"]
         if (not isinstance(g, list) or len(g) != 2
@@ -186,49 +200,44 @@ def _resolve(path: str, rel_to: str) -> str:
     return cand if os.path.exists(cand) else path
 
 
-def _read_nav(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(time, position (n, 2), heading deg) of a recording's /nav; a static array at the origin
-    heading north when /nav is absent (DESIGN section 3)."""
+def _read_nav(path: str) -> Nav:
+    """The navigation of a recording (:attr:`arrayproc.io.recording.Recording.nav`; a static
+    array at the origin heading north when /nav is absent, DESIGN section 3)."""
+    from arrayproc.io.recording import Recording
+
     if not os.path.exists(path):
         raise FormatError(f"{path}: recording with the navigation not found (set tracker.nav)")
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise FormatError(f"{path}: not a readable HDF5 file") from None
-    with f:
-        if "nav" not in f:
-            return np.zeros(1), np.zeros((1, 2)), np.zeros(1)
-        g = f["nav"]
-        for k in ("time", "position", "heading"):
-            if k not in g:
-                raise FormatError(f"{path}: /nav/{k} is missing")
-        t = np.asarray(g["time"][()], float).reshape(-1)
-        pos = np.asarray(g["position"][()], float)
-        hd = np.asarray(g["heading"][()], float).reshape(-1)
-    if t.size == 0 or pos.shape != (t.size, 2) or hd.shape != t.shape:
-        raise FormatError(f"{path}: /nav time, position (n, 2) and heading shapes disagree")
-    if np.any(np.diff(t) <= 0):
-        raise FormatError(f"{path}: /nav/time is not strictly increasing")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(pos)) and np.all(np.isfinite(hd))):
-        raise FormatError(f"{path}: /nav contains NaN or Inf")
-    return t, pos, hd
+    with Recording(path) as rec:
+        return rec.nav
 
 
-def ownship_states(nav_t: np.ndarray, nav_pos: np.ndarray, nav_hd: np.ndarray,
-                   t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Observer [x, y, ẋ, ẏ] (m, m/s) and heading (rad) at times t from a nav track: positions
-    interpolated linearly, velocity from central differences, heading on the circle."""
-    if nav_t.size == 1:
-        own = np.zeros((t.size, 4))
-        own[:, :2] = nav_pos[0]
-        return own, np.full(t.size, math.radians(nav_hd[0]))
-    vel = np.gradient(nav_pos, nav_t, axis=0)
-    own = np.empty((t.size, 4))
-    for i in range(2):
-        own[:, i] = np.interp(t, nav_t, nav_pos[:, i])
-        own[:, 2 + i] = np.interp(t, nav_t, vel[:, i])
-    hd = np.interp(t, nav_t, np.unwrap(np.deg2rad(nav_hd)))
-    return own, hd
+def ownship_states(nav: Nav, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Observer states and headings at the bearing times.
+
+    Parameters
+    ----------
+    nav : Nav
+        The array's navigation.
+    t : (K,) ndarray
+        Times, s.
+
+    Returns
+    -------
+    own : (K, 4) ndarray
+        [x, y, ẋ, ẏ] (m, m/s): positions from :meth:`Nav.at`; velocities from the fixes'
+        central differences, interpolated linearly (zero for a static array).
+    heading : (K,) ndarray
+        Heading, rad, from :meth:`Nav.at`.
+    """
+    t = np.asarray(t, dtype=float)
+    pos, hd, _, _ = nav.at(t)
+    own = np.zeros((t.size, 4))
+    own[:, :2] = pos
+    if nav.time.size > 1:
+        vel = np.gradient(nav.position, nav.time, axis=0)
+        for i in range(2):
+            own[:, 2 + i] = np.interp(t, nav.time, vel[:, i])
+    return own, np.deg2rad(hd)
 
 
 def assign_by_continuity(port: np.ndarray, stbd: np.ndarray) -> np.ndarray:
@@ -243,64 +252,112 @@ def assign_by_continuity(port: np.ndarray, stbd: np.ndarray) -> np.ndarray:
     z[0] = port[0], stbd[0]
     for k in range(1, port.size):
         # first-order prediction of each stream (zero-order at the second bearing)
-        p0 = z[k - 1, 0] + (kc.wrap(z[k - 1, 0] - z[k - 2, 0]) if k > 1 else 0.0)
-        p1 = z[k - 1, 1] + (kc.wrap(z[k - 1, 1] - z[k - 2, 1]) if k > 1 else 0.0)
-        d = [abs(kc.wrap(port[k] - p0)), abs(kc.wrap(stbd[k] - p1)),
-             abs(kc.wrap(stbd[k] - p0)), abs(kc.wrap(port[k] - p1))]
+        p0 = z[k - 1, 0] + (km.wrap(z[k - 1, 0] - z[k - 2, 0]) if k > 1 else 0.0)
+        p1 = z[k - 1, 1] + (km.wrap(z[k - 1, 1] - z[k - 2, 1]) if k > 1 else 0.0)
+        d = [abs(km.wrap(port[k] - p0)), abs(km.wrap(stbd[k] - p1)),
+             abs(km.wrap(stbd[k] - p0)), abs(km.wrap(port[k] - p1))]
         z[k] = (port[k], stbd[k]) if int(np.argmin(d)) < 2 else (stbd[k], port[k])
     return z
 
 
-def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
-                   cfg: dict[str, Any], levels_db: np.ndarray | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Run the configured filter (one hypothesis per column of zs_rad) over the bearings;
-    ``levels_db`` (K,) received levels for filters that use them (the RPF).
+_LEVEL_KEYS = ("tl_table", "src_depth_m", "rcv_depth_m", "sigma_level_db", "source_level")
 
-    Returns the combined state (K, n) (eq. (12)), covariance (K, n, n) (eq. (13)), weights
-    (K, n_hyp) and the kernel status (bit 4: every hypothesis diverged)."""
-    model = make_model(cfg["model"], float(cfg["q1"]), float(cfg["q2"]))
+
+def build_components(cfg: dict[str, Any], levels: bool = False
+                     ) -> tuple[MotionModel, MeasurementModel, Any, TrackPrior]:
+    """Motion model, measurement model, filter and initialisation prior of a tracker config.
+
+    Parameters
+    ----------
+    cfg : dict
+        A :func:`load_tracker_config` result.
+    levels : bool
+        Use the level + bearing model (SPL paper eqs. (31)-(33)) instead of bearings only.
+
+    Returns
+    -------
+    motion_model, measurement_model, filter, prior
+    """
+    motion = make_model(cfg["model"], float(cfg["q1"]), float(cfg["q2"]))
+    params = dict(cfg["params"])
+    level_params = {k: params.pop(k) for k in _LEVEL_KEYS if k in params}
+    sigma = float(cfg["sigma_bearing_deg"])
+    meas: MeasurementModel
+    if levels:
+        meas = LevelBearing(sigma_deg=sigma, **level_params)
+    else:
+        meas = Bearing(sigma_deg=sigma)
     try:
-        filt = make_filter(cfg["filter"], model, float(cfg["sigma_bearing_deg"]),
-                           **cfg["params"])
+        filt = make_filter(cfg["filter"], **params)
     except ValueError as e:
         raise ConfigError(f"tracker.params: {e}") from None
-    prior = TrackPrior(sigma_bearing_deg=float(cfg["sigma_bearing_deg"]),
+    prior = TrackPrior(sigma_bearing_deg=sigma,
                        **{k: float(cfg[k]) for k in _PRIOR_KEYS if k in cfg})
+    return motion, meas, filt, prior
+
+
+def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
+                   cfg: dict[str, Any], levels_db: np.ndarray | None = None,
+                   heading: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Run the configured filter, one hypothesis per column of ``zs_rad``, combined by the L-R
+    resolver (eqs. (9)-(13)).
+
+    Parameters
+    ----------
+    times : (K,) ndarray
+        s.
+    zs_rad : (K, n_hyp) ndarray
+        Bearings, rad; column h feeds hypothesis h.
+    own : (K, 4) ndarray
+        Observer states (m, m/s).
+    cfg : dict
+        Tracker configuration (:func:`load_tracker_config`).
+    levels_db : (K,) ndarray, optional
+        Received levels (dB re 1 µPa): the level + bearing model is used (rows with a
+        non-finite level update on the bearing alone).
+    heading : (K,) ndarray, optional
+        Array heading, rad (context of heading-dependent models).
+
+    Returns
+    -------
+    xs : (K, n) ndarray
+        Combined state (eq. (12)).
+    Ps : (K, n, n) ndarray
+        Covariance (eq. (13)).
+    ws : (K, n_hyp) ndarray
+        Weights.
+    status : int
+        Bit 1 a covariance was repaired, bit 2 a hypothesis diverged, bit 4 every hypothesis
+        diverged (the estimate is frozen from then on).
+    """
+    motion, meas, filt, prior = build_components(cfg, levels_db is not None)
+    bearing_only = Bearing(sigma_deg=float(cfg["sigma_bearing_deg"]))
     K, n_hyp = zs_rad.shape
-    n = model.dim
+    n = motion.ndim
     xs = np.zeros((K, n))
     Ps = np.zeros((K, n, n))
     ws = np.zeros((K, n_hyp))
-    if hasattr(filt, "kernel_args"):
-        kind, U, wm, wc, Up, wmp, wcp = filt.kernel_args()
-        p = prior.as_array()
-        draw = np.array([p[0], p[2], 0.0])
-        status = kc.run_track(kind, model.code, n_hyp, np.ascontiguousarray(times),
-                              np.ascontiguousarray(zs_rad), np.ascontiguousarray(own),
-                              filt.sigma, model.q1, model.q2, p, draw, U, wm, wc, Up, wmp,
-                              wcp, xs, Ps, ws)
-        return xs, Ps, ws, int(status)
-    # any other filter object (e.g. a particle filter registered in FILTERS): per-step path
-    fs = []
-    for h in range(n_hyp):
-        f = filt if h == 0 else make_filter(cfg["filter"], model,
-                                            float(cfg["sigma_bearing_deg"]), **cfg["params"])
-        f.initialize(*init_from_bearing(math.degrees(zs_rad[0, h]), own[0], prior, n))
-        fs.append(f)
-    lr = LRResolver(fs)
+    hd = np.zeros(K) if heading is None else np.asarray(heading, float)
+    states = [filt.initialize(*initial_state(float(zs_rad[0, h]), own[0], prior, n),
+                              t=float(times[0])) for h in range(n_hyp)]
+    lr = LRResolver(filt, motion, meas, states)
     status = 0
     for k in range(K):
         if k > 0:
+            ctx = Context(own[k], own[k - 1], float(hd[k]), float(times[k]))
+            if levels_db is not None and math.isfinite(levels_db[k]):
+                zk = [np.array([zs_rad[k, h], levels_db[k]]) for h in range(n_hyp)]
+                model = meas
+            else:
+                zk = [zs_rad[k, h] for h in range(n_hyp)]
+                model = bearing_only if levels_db is not None else meas
             try:
-                lr.step(times[k] - times[k - 1], own[k - 1], own[k],
-                        np.degrees(zs_rad[k]).tolist(),
-                        None if levels_db is None else float(levels_db[k]))
+                status |= lr.step(float(times[k] - times[k - 1]), ctx, zk, model)
             except FilterDivergence:
                 xs[k:], Ps[k:], ws[k:] = xs[k - 1], Ps[k - 1], ws[k - 1]
-                return xs, Ps, ws, 4
-        xs[k], Ps[k] = lr.estimate()
-        ws[k] = lr.weights
+                return xs, Ps, ws, status | 6
+        xs[k], Ps[k], ws[k] = lr.combine()
     return xs, Ps, ws, status
 
 
@@ -320,21 +377,20 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
                           "set tracker.nav")
     rec = _resolve(src, config_path if cfg.get("nav") else products_path)
-    nav_t, nav_pos, nav_hd = _read_nav(rec)
     t = b["time"]
-    own, hd = ownship_states(nav_t, nav_pos, nav_hd, t)
+    own, hd = ownship_states(_read_nav(rec), t)
     port = np.deg2rad(b["bearing_port_deg"])
     stbd = np.deg2rad(b["bearing_stbd_deg"])
     if cfg["lr"]:
         zs = assign_by_continuity(port, stbd)
     else:
         zs = (port if cfg["side"] == "port" else stbd)[:, None]
-    zs = (zs + np.pi) % (2 * np.pi) - np.pi
+    zs = wrap_pi(zs)
     if progress:
         print(f"tracking {t.size} bearings with {cfg['filter'].upper()}"
               f"{' + L-R resolution' if cfg['lr'] else ''}", file=sys.stderr)
     xs, Ps, ws, status = track_bearings(t, zs, own, cfg,
-                                        b[cfg["level"]] if "level" in cfg else None)
+                                        b[cfg["level"]] if "level" in cfg else None, hd)
     n_ok = t.size
     if status & 4:
         last = np.flatnonzero(np.any(ws > 0, axis=1))
@@ -353,5 +409,5 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
                  cov=Ps[sl, :4, :4], own_x=own[sl, 0], own_y=own[sl, 1])
 
 
-__all__ = ["run_tracker", "load_tracker_config", "track_bearings", "ownship_states",
-           "assign_by_continuity"]
+__all__ = ["run_tracker", "load_tracker_config", "track_bearings", "build_components",
+           "ownship_states", "assign_by_continuity"]

@@ -1,4 +1,5 @@
-"""Numba tracking kernels against closed forms and independent numpy references (issue 6)."""
+"""Gaussian filters and their numba kernels against closed forms and independent numpy
+references (L-R paper section IV)."""
 
 from __future__ import annotations
 
@@ -10,110 +11,31 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate, stats
 
-from arrayproc.track import _kernels as kc
 from arrayproc.track.crlb import polar_prior_covariance
 from arrayproc.track.filters import CKF, EKF, GHF, SRF, UKF, FilterDivergence, make_filter
-from arrayproc.track.init import TrackPrior, init_from_bearing
-from arrayproc.track.models import (
-    Q1_PAPER,
-    Q2_PAPER,
-    bearing_deg,
-    constant_turn,
-    constant_velocity,
-    mirror_bearing_deg,
-    port_starboard,
+from arrayproc.track.filters import _kernels as kf
+from arrayproc.track.filters.points import (
+    cubature_points,
+    gauss_hermite_points,
+    unscented_points,
 )
-from arrayproc.track.points import cubature_points, gauss_hermite_points, unscented_points
+from arrayproc.track.init import TrackPrior, init_from_bearing
+from arrayproc.track.models.bearing import Bearing
+from arrayproc.track.models.motion import constant_turn, constant_velocity
+from arrayproc.track.state import Context
 
 OWN0 = np.array([100.0, -50.0, 1.5, -1.8])
 OWN1 = np.array([190.0, -158.0, 1.2, -2.0])
+CTX = Context(OWN1, OWN0)
+BEARING = Bearing(sigma_deg=1.5)
 
 
-# ---------------------------------------------------------------------------------- models
-
-def _ct_abs_reference(X, T):
-    """Eq. (5) as a matrix on the absolute 5-state."""
-    psi = X[4]
-    s, c = math.sin(psi * T), math.cos(psi * T)
-    F = np.array([[1, 0, s / psi, -(1 - c) / psi, 0], [0, 1, (1 - c) / psi, s / psi, 0],
-                  [0, 0, c, -s, 0], [0, 0, s, c, 0], [0, 0, 0, 0, 1]])
-    return F @ X, F
-
-
-def test_cv_transition_is_eqs_2_3():
-    m = constant_velocity()
-    x = np.array([4000.0, 900.0, -2.0, 0.5])
-    T = 60.0
-    F = np.block([[np.eye(2), T * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
-    u = np.array([OWN1[0] - OWN0[0] - T * OWN0[2], OWN1[1] - OWN0[1] - T * OWN0[3],
-                  OWN1[2] - OWN0[2], OWN1[3] - OWN0[3]])  # eq. (3)
-    np.testing.assert_allclose(m.transition(x, T, OWN0, OWN1), F @ x - u, rtol=1e-13)
-    np.testing.assert_allclose(m.jacobian(x, T, OWN0), F)
-
-
-def test_ct_transition_is_eq_5_with_its_input_vector():
-    m = constant_turn()
-    x = np.array([4000.0, 900.0, -2.0, 0.5, 0.001])
-    T = 60.0
-    _, F = _ct_abs_reference(np.r_[x[:4] + OWN0, x[4]], T)
-    psi = x[4]
-    s, c = math.sin(psi * T), math.cos(psi * T)
-    vx, vy = OWN0[2], OWN0[3]
-    u = np.array([OWN1[0] - OWN0[0] - s / psi * vx + (1 - c) / psi * vy,
-                  OWN1[1] - OWN0[1] - (1 - c) / psi * vx - s / psi * vy,
-                  OWN1[2] - c * vx + s * vy, OWN1[3] - s * vx - c * vy, 0.0])  # eq. (5) input
-    np.testing.assert_allclose(m.transition(x, T, OWN0, OWN1), F @ x - u, rtol=1e-12)
-
-
-def test_ct_tends_to_cv_at_zero_turn_rate():
-    x5 = np.array([4000.0, 900.0, -2.0, 0.5, 0.0])
-    a = constant_turn().transition(x5, 60.0, OWN0, OWN1)
-    b = constant_velocity().transition(x5[:4], 60.0, OWN0, OWN1)
-    np.testing.assert_allclose(a[:4], b, rtol=1e-13)
-    x5[4] = 1e-12
-    np.testing.assert_allclose(constant_turn().transition(x5, 60.0, OWN0, OWN1)[:4], b,
-                               rtol=1e-10)
-
-
-@settings(max_examples=40, deadline=None)
-@given(psi=st.floats(-0.01, 0.01), vx=st.floats(-5, 5), vy=st.floats(-5, 5))
-def test_ct_jacobian_matches_finite_differences(psi, vx, vy):
-    m = constant_turn()
-    x = np.array([3000.0, -2000.0, vx, vy, psi])
-    J = m.jacobian(x, 60.0, OWN0)
-    num = np.empty((5, 5))
-    for j in range(5):
-        h = 1e-6 if j == 4 else 1e-3
-        e = np.zeros(5)
-        e[j] = h
-        num[:, j] = (m.transition(x + e, 60.0, OWN0, OWN1)
-                     - m.transition(x - e, 60.0, OWN0, OWN1)) / (2 * h)
-    np.testing.assert_allclose(J, num, rtol=1e-5, atol=1e-6)
-
-
-def test_process_noise_eqs_4_and_6():
-    T = 60.0
-    Q = constant_velocity().process_noise(T)
-    ref = Q1_PAPER * np.block([[T**3 / 3 * np.eye(2), T**2 / 2 * np.eye(2)],
-                               [T**2 / 2 * np.eye(2), T * np.eye(2)]])
-    np.testing.assert_allclose(Q, ref)
-    Q5 = constant_turn().process_noise(T)
-    np.testing.assert_allclose(Q5[:4, :4], ref)
-    assert Q5[4, 4] == pytest.approx(Q2_PAPER * T)
-    # unit conversion of the paper's intensities
-    assert Q1_PAPER == pytest.approx(1.944e-6 * 1e6 / 216000.0)
-
-
-def test_bearing_and_mirror_conventions():
-    assert bearing_deg(np.array([1.0, 0.0])) == pytest.approx(90.0)  # east
-    assert bearing_deg(np.array([0.0, -1.0])) == pytest.approx(180.0)
-    assert bearing_deg(np.array([-1.0, 1.0])) == pytest.approx(315.0)
-    assert mirror_bearing_deg(100.0, 140.0) == pytest.approx(180.0)  # eq. (8): 2h − θ
-    assert mirror_bearing_deg(350.0, 10.0) == pytest.approx(30.0)
-    port, stbd, right = port_starboard(np.deg2rad([100.0, 170.0]), np.deg2rad(140.0))
-    np.testing.assert_allclose(np.rad2deg(port) % 360, [100.0, 110.0])
-    np.testing.assert_allclose(np.rad2deg(stbd) % 360, [180.0, 170.0])
-    assert list(right) == [False, True]
+def _step(f, model, x, P, z_deg=41.0, predict=True):
+    """One predict (60 s) + bearing update of filter ``f``; returns (state, log-likelihood)."""
+    s = f.initialize(x, P)
+    if predict:
+        s = f.predict(s, model, 60.0, CTX)
+    return f.update(s, math.radians(z_deg), BEARING, CTX)
 
 
 # ---------------------------------------------------------------------------- sample points
@@ -162,10 +84,10 @@ def _ekf_ref(x, P, z, R, T, F, Q, fx):
 def _sp_ref(x, P, z, R, T, model, U, wm, wc):
     L = np.linalg.cholesky(P)
     X = x + U @ L.T
-    Y = np.array([model.transition(xi, T, OWN0, OWN1) for xi in X])
+    Y = np.array([model.function(xi, T, CTX) for xi in X])
     x = wm @ Y
     D = Y - x
-    P = D.T @ (wc[:, None] * D) + model.process_noise(T)
+    P = D.T @ (wc[:, None] * D) + model.covariance(T)
     L = np.linalg.cholesky(P)
     X = x + U @ L.T
     Z = np.arctan2(X[:, 0], X[:, 1])
@@ -188,14 +110,11 @@ def _state(n):
 
 @pytest.mark.parametrize("model", [constant_velocity(), constant_turn()])
 def test_ekf_step_matches_numpy(model):
-    x, P = _state(model.dim)
-    f = EKF(model, 1.5)
-    f.initialize(x, P)
-    f.predict(60.0, OWN0, OWN1)
-    ll = f.update(41.0)
+    x, P = _state(model.ndim)
+    f, ll = _step(EKF(), model, x, P)
     xr, Pr, llr = _ekf_ref(x, P, math.radians(41.0), math.radians(1.5) ** 2, 60.0,
-                           model.jacobian(x, 60.0, OWN0), model.process_noise(60.0),
-                           model.transition(x, 60.0, OWN0, OWN1))
+                           model.jacobian(x, 60.0, CTX), model.covariance(60.0),
+                           model.function(x, 60.0, CTX))
     np.testing.assert_allclose(f.x, xr, rtol=1e-10)
     np.testing.assert_allclose(f.P, Pr, rtol=1e-8, atol=1e-10 * np.abs(Pr).max())
     assert ll == pytest.approx(llr, rel=1e-10)
@@ -206,13 +125,11 @@ def test_ekf_step_matches_numpy(model):
                                     (GHF, {"gh_order": 4})])
 @pytest.mark.parametrize("model", [constant_velocity(), constant_turn()])
 def test_sample_point_step_matches_numpy(cls, kw, model):
-    x, P = _state(model.dim)
-    f = cls(model, 1.5, **kw)
-    f.initialize(x, P)
-    f.predict(60.0, OWN0, OWN1)
-    ll = f.update(41.0)
+    x, P = _state(model.ndim)
+    filt = cls(**kw)
+    f, ll = _step(filt, model, x, P)
     xr, Pr, llr = _sp_ref(x, P, math.radians(41.0), math.radians(1.5) ** 2, 60.0, model,
-                          f.U, f.wm, f.wc)
+                          *filt.points(model.ndim))
     np.testing.assert_allclose(f.x, xr, rtol=1e-9)
     np.testing.assert_allclose(f.P, Pr, rtol=1e-7, atol=1e-9 * np.abs(Pr).max())
     assert ll == pytest.approx(llr, rel=1e-9)
@@ -233,7 +150,7 @@ def test_shifted_rayleigh_moments_by_quadrature(u):
     c = q(dens)
     m1 = q(lambda t: t * dens(t)) / c
     m2r = q(lambda t: t * t * dens(t)) / c
-    rho, m2 = kc.shifted_rayleigh_moments(u)
+    rho, m2 = kf.shifted_rayleigh_moments(u)
     assert rho == pytest.approx(m1, rel=1e-9)
     assert m2 == pytest.approx(m2r, rel=1e-9)
 
@@ -262,9 +179,7 @@ def _srf_ref(x, P, z, sigma):
 @pytest.mark.parametrize("zdeg", [55.0, 40.0, 70.0])
 def test_srf_update_matches_quadrature(zdeg):
     x, P = _state(4)
-    f = SRF(constant_velocity(), 1.5, likelihood="exact")
-    f.initialize(x, P)
-    ll = f.update(zdeg)
+    f, ll = _step(SRF(likelihood="exact"), constant_velocity(), x, P, zdeg, predict=False)
     xr, Pr, llr = _srf_ref(x, P, math.radians(zdeg), math.radians(1.5))
     np.testing.assert_allclose(f.x, xr, rtol=1e-7)
     np.testing.assert_allclose(f.P, Pr, rtol=1e-6, atol=1e-8 * np.abs(Pr).max())
@@ -276,7 +191,7 @@ def test_srf_exact_likelihood_is_a_density_over_the_bearing():
 
     def p(th):
         xx, PP = x.copy(), P.copy()
-        ll, _ = kc.srf_update(xx, PP, th, math.radians(1.5), True)
+        ll, _ = kf.srf_update(xx, PP, th, math.radians(1.5), True)
         return math.exp(ll)
 
     tot = integrate.quad(p, -math.pi, math.pi, points=[math.atan2(x[0], x[1])], limit=400)[0]
@@ -286,12 +201,10 @@ def test_srf_exact_likelihood_is_a_density_over_the_bearing():
 def test_srf_cv_prediction_is_exact_linear():
     x, P = _state(4)
     m = constant_velocity()
-    f = SRF(m, 1.5)
-    f.initialize(x, P)
-    f.predict(60.0, OWN0, OWN1)
-    F = m.jacobian(x, 60.0, OWN0)
-    np.testing.assert_allclose(f.x, m.transition(x, 60.0, OWN0, OWN1), rtol=1e-13)
-    np.testing.assert_allclose(f.P, F @ P @ F.T + m.process_noise(60.0), rtol=1e-12)
+    f = SRF().predict(SRF().initialize(x, P), m, 60.0, CTX)
+    F = m.jacobian(x, 60.0, CTX)
+    np.testing.assert_allclose(f.x, m.function(x, 60.0, CTX), rtol=1e-13)
+    np.testing.assert_allclose(f.P, F @ P @ F.T + m.covariance(60.0), rtol=1e-12)
 
 
 # ------------------------------------------------------------------ initialisation, hygiene
@@ -316,23 +229,20 @@ def test_initialisation_matches_the_polar_prior_of_crlb_module():
 def test_chol_repair_recovers_or_reports():
     L = np.empty((3, 3))
     P = np.diag([1.0, 1.0, -1e-12])
-    assert kc.chol_repair(P, L) == 1
+    assert kf.chol_repair(P, L) == 1
     assert np.all(np.linalg.eigvalsh(P) > 0)
     P = np.array([[1.0, 2.0], [0.0, 1.0]])  # asymmetric: symmetrised then factored
-    assert kc.chol_repair(P, np.empty((2, 2))) in (0, 1)
+    assert kf.chol_repair(P, np.empty((2, 2))) in (0, 1)
     np.testing.assert_allclose(P, P.T)
-    assert kc.chol_repair(np.array([[np.nan, 0.0], [0.0, 1.0]]), np.empty((2, 2))) == -1
+    assert kf.chol_repair(np.array([[np.nan, 0.0], [0.0, 1.0]]), np.empty((2, 2))) == -1
 
 
 def test_filters_raise_instead_of_returning_nan():
     for name in ("ekf", "ukf", "ckf", "ghf", "srf"):
-        f = make_filter(name, constant_velocity())
         x, P = _state(4)
         P[0, 0] = np.nan
-        f.initialize(x, P)
         with pytest.raises(FilterDivergence):
-            f.predict(60.0, OWN0, OWN1)
-            f.update(40.0)
+            _step(make_filter(name), constant_velocity(), x, P, 40.0)
 
 
 @settings(max_examples=30, deadline=None)
@@ -340,11 +250,8 @@ def test_filters_raise_instead_of_returning_nan():
 def test_updates_keep_covariance_symmetric_positive_definite(z, r, seed):
     rng = np.random.default_rng(seed)
     for name in ("ekf", "ukf", "ckf", "srf"):
-        f = make_filter(name, constant_velocity())
         x, P = init_from_bearing(float(rng.uniform(0, 360)), OWN0, TrackPrior(range_m=r), 4)
-        f.initialize(x, P)
-        f.predict(60.0, OWN0, OWN1)
-        f.update(z)
+        f, _ = _step(make_filter(name), constant_velocity(), x, P, z)
         assert np.all(np.isfinite(f.x))
         np.testing.assert_array_equal(f.P, f.P.T)
         assert np.all(np.linalg.eigvalsh(f.P) > 0)
@@ -356,17 +263,6 @@ def test_log_phi_plus_u_phi_by_quadrature(u):
     val = integrate.quad(lambda t: t * math.exp(-0.5 * t * t + t * u), 0, 40, epsabs=0,
                          epsrel=1e-13, limit=400, points=[min(1.0, 3 / max(abs(u), 1e-9))])[0]
     ref = math.log(val) - 0.5 * u * u - 0.5 * math.log(2 * math.pi)
-    assert kc._log_phi_plus_u_Phi(u) == pytest.approx(ref, rel=1e-11, abs=1e-11)
+    assert kf._log_phi_plus_u_Phi(u) == pytest.approx(ref, rel=1e-11, abs=1e-11)
 
 
-@pytest.mark.parametrize("case", [1, 2])
-def test_scenario_truth_follows_the_filter_models(case):
-    """The section-V truth (built with kinematics.Trajectory) obeys eq. (1) with eqs. (2)-(3)
-    (Case I) or eq. (5) (Case II) exactly: the relative model and the trajectories agree."""
-    from arrayproc.evaluate.montecarlo import LRScenario
-    scn = LRScenario(case=case)
-    g = scn.geometry()
-    m = constant_velocity() if case == 1 else constant_turn()
-    for k in range(1, g["times"].size):
-        pred = m.transition(g["rel"][k - 1], 60.0, g["own"][k - 1], g["own"][k])
-        np.testing.assert_allclose(pred, g["rel"][k], rtol=1e-9, atol=1e-7)

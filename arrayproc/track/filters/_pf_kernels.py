@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from arrayproc.track.models._kernels import bearing_loglik_term, level_loglik_term
+
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 MIX2 = np.uint64(0x94D049BB133111EB)
@@ -152,37 +154,44 @@ def init_polar_prior(parts, state, obs_x, obs_y, bearing0, sig_bearing, range_me
         parts[i, 3] = s * math.cos(c)
 
 
-@njit(cache=True, inline="always")
-def _tl_interp(r, r0, dr, tl):
-    """Linear interpolation of a uniform-grid TL profile; held below the first range and
-    continued by cylindrical spreading, TL(r_max) + 10 log10(r / r_max), beyond the last."""
-    u = (r - r0) / dr
-    if u <= 0.0:
-        return tl[0]
-    m = tl.shape[0] - 1
-    if u >= m:
-        rmax = r0 + m * dr
-        return tl[m] + 10.0 * math.log10(r / rmax)
-    j = int(u)
-    f = u - j
-    return tl[j] * (1.0 - f) + tl[j + 1] * f
+@njit(cache=True)
+def propagate_cv(parts, state, dt, sigma_a):
+    """Constant-velocity prediction of every particle, SPL paper eqs. (4)-(6), (17):
+    x ← F x + Γ ν, ν ~ N(0, σ_a² I₂) (one normal pair per particle). Skipped when ``dt`` ≤ 0."""
+    if dt > 0.0:
+        h = 0.5 * dt * dt
+        for i in range(parts.shape[0]):
+            ax, ay = rand_normal_pair(state)
+            ax *= sigma_a
+            ay *= sigma_a
+            parts[i, 0] += dt * parts[i, 2] + h * ax
+            parts[i, 1] += dt * parts[i, 3] + h * ay
+            parts[i, 2] += dt * ax
+            parts[i, 3] += dt * ay
+
+
+@njit(cache=True)
+def max_finite(ll):
+    """Largest value of ``ll`` (−inf if none)."""
+    m = -np.inf
+    for i in range(ll.shape[0]):
+        if ll[i] > m:
+            m = ll[i]
+    return m
 
 
 @njit(cache=True)
 def predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, level,
                    sig_level, use_theta, use_level, sl_par, tl_r0, tl_dr, tl):
-    """Prediction and log-likelihood for every particle; returns max log-likelihood.
+    """Prediction (:func:`propagate_cv`) and log-likelihood of every absolute particle for the
+    fused Monte Carlo kernel; returns the max log-likelihood.
 
-    Prediction (skipped when ``dt`` ≤ 0), SPL paper eqs. (4)-(6), (17):
-    x ← F x + Γ ν, ν ~ N(0, σ_a² I₂) (one normal pair per particle).
-    Log-likelihood up to a constant, eqs. (31)-(33): bearing term
-    −wrap(θ − atan2(dx, dy))² / 2σ_θ² (eqs. (9), (32)), the wrapped difference computed as
-    atan2(sin θ·dy − cos θ·dx, cos θ·dy + sin θ·dx); level term
-    −(l − SL(v) + TL(r))² / 2σ_l² with SL(v) = sl0 + slope·log10(v / v_ref) (eq. (12)) and TL
-    linearly interpolated in range on the profile (r0, dr, tl) (eqs. (13), (16)).
+    Log-likelihood up to a constant, SPL paper eqs. (31)-(33): the bearing term
+    (eqs. (9), (32)) and the level term with SL(v) of eq. (12) and TL linearly interpolated in
+    range (eqs. (13), (16)) — the kernels of the bearing and level measurement models
+    (:mod:`arrayproc.track.models._kernels`).
     """
     n = parts.shape[0]
-    h = 0.5 * dt * dt
     it2 = 0.5 / (sig_theta * sig_theta)
     il2 = 0.5 / (sig_level * sig_level)
     sl0 = sl_par[0]
@@ -191,30 +200,16 @@ def predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta
     s_th = math.sin(theta)
     c_th = math.cos(theta)
     llmax = -np.inf
-    if dt > 0.0:
-        for i in range(n):
-            ax, ay = rand_normal_pair(state)
-            ax *= sigma_a
-            ay *= sigma_a
-            parts[i, 0] += dt * parts[i, 2] + h * ax
-            parts[i, 1] += dt * parts[i, 3] + h * ay
-            parts[i, 2] += dt * ax
-            parts[i, 3] += dt * ay
+    propagate_cv(parts, state, dt, sigma_a)
     for i in range(n):
         dx = parts[i, 0] - obs_x
         dy = parts[i, 1] - obs_y
         v = 0.0
         if use_theta:
-            # θ − atan2(dx, dy) wrapped to (−π, π], as one atan2 of the rotated vector
-            e = math.atan2(s_th * dy - c_th * dx, c_th * dy + s_th * dx)
-            v -= e * e * it2
+            v -= bearing_loglik_term(dx, dy, s_th, c_th, it2)
         if use_level:
-            v2 = parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3]
-            if v2 < 1e-12:
-                v2 = 1e-12
-            e = level - (sl0 + half_slope * math.log10(v2 / vref2)
-                         - _tl_interp(math.sqrt(dx * dx + dy * dy), tl_r0, tl_dr, tl))
-            v -= e * e * il2
+            v -= level_loglik_term(parts[i, 2], parts[i, 3], dx, dy, level, il2, sl0,
+                                   half_slope, vref2, tl_r0, tl_dr, tl)
         ll[i] = v
         if v > llmax:
             llmax = v
@@ -380,10 +375,11 @@ def regularise(parts, src, idx, dmat, h, state):
 
 
 @njit(cache=True)
-def speed_gate(parts, w, ll, v_max, llmax):
+def speed_gate(parts, w, ll, v_max, llmax, ovx=0.0, ovy=0.0):
     """Hard speed constraint: particles whose speed ‖(ẋ, ẏ)‖ exceeds ``v_max`` (m/s) get zero
     likelihood (``ll`` = −inf), unless that would leave no particle of positive weight ``w``,
-    in which case nothing changes. ``v_max`` ≤ 0 switches it off. Returns the new maximum of
+    in which case nothing changes. ``v_max`` ≤ 0 switches it off. ``ovx``, ``ovy``: a velocity
+    added to the particles' (relative particles: the observer's). Returns the new maximum of
     ``ll``. Not in the SPL paper: the optional prior knowledge of a maximum target speed
     (docs/validation.md, Tracking II)."""
     if v_max <= 0.0:
@@ -392,13 +388,17 @@ def speed_gate(parts, w, ll, v_max, llmax):
     v2 = v_max * v_max
     keep = 0
     for i in range(n):
-        if w[i] > 0.0 and parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3] <= v2:
+        vx = parts[i, 2] + ovx
+        vy = parts[i, 3] + ovy
+        if w[i] > 0.0 and vx * vx + vy * vy <= v2:
             keep += 1
     if keep == 0:
         return llmax
     m = -np.inf
     for i in range(n):
-        if parts[i, 2] * parts[i, 2] + parts[i, 3] * parts[i, 3] > v2:
+        vx = parts[i, 2] + ovx
+        vy = parts[i, 3] + ovy
+        if vx * vx + vy * vy > v2:
             ll[i] = -np.inf
         elif ll[i] > m:
             m = ll[i]
@@ -489,19 +489,17 @@ def rpf_run(theta, level, use_theta0, use_level, times, obs, seed, n_particles, 
 
 
 @njit(cache=True)
-def rpf_step(parts, w, w_new, s, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta,
-             level, sig_level, use_level, sl_par, tl_r0, tl_dr, tl, n_thr, resample_method, h,
-             idx, src, mean, pcov, dmat, v_max=0.0):
-    """One RPF cycle for a step-by-step tracker (absolute particle states): prediction,
-    update with the bearing (and the level if ``use_level``), regularization-resampling if
-    N_eff < N_thr·N, moments; ``v_max`` as in :func:`speed_gate`. Same kernels and draw
-    order as :func:`rpf_run`. Returns
-    ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``; the caller adds the Gaussian normalising
-    constants to get log p(z | past)."""
+def rpf_correct(parts, w, w_new, s, ll, state, n_thr, resample_method, h, idx, src, mean, pcov,
+                dmat, v_max, ovx, ovy):
+    """Weighting and regularization-resampling of one RPF cycle for a step-by-step filter, from
+    the particles' log-likelihoods ``ll`` (any measurement model): speed gate
+    (:func:`speed_gate`), reweighting (eqs. (18)-(20)), moments (eqs. (29)-(30)) and, if
+    N_eff < N_thr·N, resampling with Epanechnikov jitter (eqs. (21)-(28)). Same kernels and
+    draw order as :func:`rpf_run`. Returns ``(s, log Σ (w_i/s_old)·exp(ll_i), resampled)``; the
+    caller adds the measurement's normalising constant to get log p(z | past)."""
     n = parts.shape[0]
-    llmax = predict_loglik(parts, ll, state, dt, sigma_a, obs_x, obs_y, theta, sig_theta, level,
-                           sig_level, True, use_level, sl_par, tl_r0, tl_dr, tl)
-    llmax = speed_gate(parts, w, ll, v_max, llmax)
+    llmax = max_finite(ll)
+    llmax = speed_gate(parts, w, ll, v_max, llmax, ovx, ovy)
     s, neff = reweight(w, s, ll, llmax, w_new)
     w[:] = w_new
     logev = llmax + math.log(s)

@@ -5,7 +5,10 @@ constant-velocity model (eqs. (4)-(6), (17)), weights from the bearing and level
 (eqs. (18)-(19), (31)-(33)), regularization-resampling when N_eff (eq. (20)) < N_thr·N with
 the Epanechnikov kernel and the MISE-optimal bandwidth (eqs. (21)-(28)), estimate and
 covariance after that step (eqs. (29)-(30)). Bearings-only tracking is the same filter with
-the level term switched off. The per-particle work is in :mod:`arrayproc.track._pf_kernels`.
+the level term switched off. The per-particle work is in
+:mod:`arrayproc.track.filters._pf_kernels`: :class:`RegularizedParticleFilter` runs many Monte
+Carlo runs in one fused kernel (bearing and level terms inlined from the measurement models'
+kernels); :class:`RPF` is the step-by-step filter for any measurement model.
 """
 
 from __future__ import annotations
@@ -19,9 +22,13 @@ from arrayproc.acoustics.source_level import ROSS_SURFACE_SHIP, SourceLevelModel
 from arrayproc.acoustics.tl.table import TLTable
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT
-from arrayproc.track import _pf_kernels as kpf
+from arrayproc.track.base import Param
+from arrayproc.track.filters import _pf_kernels as kpf
+from arrayproc.track.filters.base import Filter, FilterDivergence
+from arrayproc.track.models.base import MeasurementModel, MotionModel
+from arrayproc.track.state import Context, ParticleState
 
-__all__ = ["RPFConfig", "RPFResult", "RegularizedParticleFilter", "RPFTracker", "run_seeds"]
+__all__ = ["RPFConfig", "RPFResult", "RegularizedParticleFilter", "RPF", "run_seeds"]
 
 
 @dataclass
@@ -149,118 +156,121 @@ class RegularizedParticleFilter:
         return RPFResult(res.est[0], res.cov[0], res.resampled[0])
 
 
-class RPFTracker:
-    """Step-by-step bearings-only RPF with the interface of :mod:`arrayproc.track.filters`
-    (``initialize``, ``predict``, ``update`` → log-likelihood, attributes ``x``, ``P`` — the
-    relative state [x, y, ẋ, ẏ] and covariance), so that ``arrayproc track`` and the L-R
-    resolver can use it (``filter = "rpf"``). CV model only.
+def _pos(v: float) -> str | None:
+    return None if v > 0 else "must be > 0"
 
-    ``initialize`` draws the particles from N(x0, P0) (the runner's linearised polar prior).
-    The process noise is ``sigma_a`` (m/s²) if given, else σ_a² = q1 / T from the model's
-    white-noise intensity (the same velocity variance per step). ``update`` returns
-    log p(z_k | z_1..k−1) ≈ log Σ w_i p(z_k | x_i).
 
-    Levels (SPL paper eqs. (15)-(16), (31)-(33)): with ``tl_table`` (a bundled table name in
-    ``data/tl`` or a path to a table file), ``update(bearing_deg, level_db)`` also weights by
-    the received level (dB re 1 µPa) with ``sigma_level_db``, source level eq. (12)
-    (``source_level`` = (sl0, slope, v_ref)) and TL at (``src_depth_m``, ``rcv_depth_m``).
+class RPF(Filter):
+    """Step-by-step regularized particle filter with the filter interface of
+    :mod:`arrayproc.track.filters` (``initialize``, ``predict``, ``update`` → (state,
+    log-likelihood)), for any measurement model with a per-particle log-likelihood
+    (:meth:`~arrayproc.track.models.base.MeasurementModel.loglik_particles`): bearings,
+    bearings + levels (SPL paper eqs. (31)-(33)), ... Constant-velocity motion only (SPL paper
+    eqs. (4)-(6)).
+
+    ``initialize`` draws the particles from N(x0, P0) (the runner's linearised polar prior)
+    with the cloud's own random stream (seeded by ``seed``). The process noise is ``sigma_a``
+    (m/s²) if given, else σ_a² = q1 / T from the motion model's white-noise intensity (the same
+    velocity variance per step). ``update`` returns log p(z_k | z_1..k−1) ≈ log Σ w_i p(z_k | x_i).
     ``max_speed_kn`` > 0 gives zero weight to particles faster than that (absolute speed).
     """
 
     name = "rpf"
+    params = {
+        "n_particles": Param("int", 5000, "particles", check=lambda v: None if v >= 2 else
+                             "must be >= 2"),
+        "n_thr": Param("float", 1.0 / 3.0, "resample when N_eff < n_thr·N",
+                       check=lambda v: None if 0 < v <= 1 else "must be in (0, 1]"),
+        "sigma_a": Param("float", None, "process noise std, m/s² (default from q1)"),
+        "resampling": Param("str", "systematic", "resampling scheme",
+                            choices=("systematic", "multinomial")),
+        "bandwidth_scale": Param("float", 1.0, "× MISE-optimal bandwidth (eq. (27))",
+                                 check=_pos),
+        "seed": Param("int", 0, "seed of the particles' random stream"),
+        "max_speed_kn": Param("float", 0.0, "speed gate, kn (0: none)",
+                              check=lambda v: None if v >= 0 else "must be >= 0 (0: no limit)"),
+    }
 
-    uses_levels = True  # update(bearing_deg, level_db): ``tracker.level`` may feed it
+    def _setup(self) -> None:
+        self.method = 0 if self.resampling == "systematic" else 1
+        self.h = float(self.bandwidth_scale) * kpf.bandwidth(self.n_particles)
+        self.v_max = float(self.max_speed_kn) * KNOT
 
-    def __init__(self, model, sigma_deg: float = 1.5, n_particles: int = 5000,
-                 n_thr: float = 1.0 / 3.0, sigma_a: float | None = None,
-                 resampling: str = "systematic", bandwidth_scale: float = 1.0,
-                 seed: int = 0, tl_table: str | None = None, src_depth_m: float = 5.0,
-                 rcv_depth_m: float = 300.0, sigma_level_db: float = 10.0,
-                 source_level: tuple = (170.0, 53.0, 5.14), max_speed_kn: float = 0.0) -> None:
-        if getattr(model, "dim", 4) != 4:
+    def initialize(self, x0: np.ndarray, P0: np.ndarray, t: float = 0.0) -> ParticleState:
+        """Particles drawn from N(x0, P0) (4-state)."""
+        n = self.n_particles
+        x0 = np.asarray(x0, float).reshape(-1)
+        if x0.size != 4:
             raise ConfigError("tracker: the rpf filter supports the cv model only")
-        if not sigma_deg > 0 or n_particles < 2 or not 0 < n_thr <= 1:
-            raise ConfigError("tracker: rpf needs sigma_bearing_deg > 0, n_particles >= 2, "
-                              "0 < n_thr <= 1")
-        if resampling not in ("systematic", "multinomial"):
-            raise ConfigError("tracker: rpf resampling must be 'systematic' or 'multinomial'")
-        self.model = model
-        self.sigma = math.radians(float(sigma_deg))
-        self.sigma_level = float(sigma_level_db)
-        self.sl_par = np.asarray(source_level, float).reshape(3)
-        self.tl = (0.0, 1.0, np.zeros(2))
-        self.has_tl = tl_table is not None
-        if self.has_tl:
-            from arrayproc.acoustics.tl.table import default_table_path
+        P0 = np.asarray(P0, float).reshape(4, 4)
+        rng = np.array([run_seeds(int(self.seed), 1, tag=3)[0]], dtype=np.uint64)
+        d = np.linalg.cholesky(P0)
+        z = kpf.normal_block(rng, 2 * n).reshape(n, 4)
+        return ParticleState(x0 + z @ d.T, np.ones(n), float(n), rng, x0.copy(), P0.copy(), t)
 
-            path = tl_table if ("/" in tl_table or tl_table.endswith(".h5")) else \
-                default_table_path(tl_table)
-            self.tl = TLTable.load(path).range_profile(src_depth_m, rcv_depth_m)
-        if not self.sigma_level > 0:
-            raise ConfigError("tracker: rpf sigma_level_db must be > 0")
-        if not max_speed_kn >= 0:
-            raise ConfigError("tracker: rpf max_speed_kn must be >= 0 (0: no limit)")
-        self.v_max = float(max_speed_kn) * KNOT
-        self.n = int(n_particles)
-        self.n_thr = float(n_thr)
-        self.sigma_a = sigma_a
-        self.method = 0 if resampling == "systematic" else 1
-        self.h = float(bandwidth_scale) * kpf.bandwidth(self.n)
-        self.state = np.array([run_seeds(int(seed), 1, tag=3)[0]], dtype=np.uint64)
-        self.parts = np.zeros((self.n, 4))      # relative states between calls
-        self.w = np.ones(self.n)
-        self.s = float(self.n)
-        self._scratch = (np.empty(self.n), np.empty(self.n), np.empty(self.n, np.int64),
-                         np.empty((self.n, 4)), np.empty(4), np.empty((4, 4)), np.empty((4, 4)))
-        self.x = np.zeros(4)
-        self.P = np.eye(4)
-        self._pending: tuple | None = None
-        self.n_resampled = 0
+    def predict(self, state: ParticleState, motion_model: MotionModel, dt: float,
+                ctx: Context) -> ParticleState:
+        """Move every particle with the CV model and white accelerations (eqs. (4)-(6), (17)).
 
-    def initialize(self, x0: np.ndarray, P0: np.ndarray) -> None:
-        x0 = np.asarray(x0, float).reshape(4)
-        d = np.linalg.cholesky(np.asarray(P0, float).reshape(4, 4))
-        z = kpf.normal_block(self.state, 2 * self.n).reshape(self.n, 4)
-        self.parts = x0 + z @ d.T
-        self.w[:] = 1.0
-        self.s = float(self.n)
-        self.x, self.P = x0.copy(), np.asarray(P0, float).reshape(4, 4).copy()
+        Parameters
+        ----------
+        state : ParticleState
+        motion_model : MotionModel
+            :class:`~arrayproc.track.models.ConstantVelocity` (its ``q1`` sets σ_a when the
+            filter's ``sigma_a`` is unset).
+        dt : float
+            Time step, s.
+        ctx : Context
+            Observer states at the previous and new times.
 
-    def predict(self, T: float, own_prev: np.ndarray, own_next: np.ndarray) -> None:
-        """Store the step; the particles move in :meth:`update` (one fused kernel)."""
-        self._pending = (float(T), np.asarray(own_prev, float), np.asarray(own_next, float))
-
-    def update(self, bearing_deg: float, level_db: float | None = None) -> float:
-        from arrayproc.track.filters import FilterDivergence
-
-        use_level = level_db is not None and math.isfinite(level_db)
-        if use_level and not self.has_tl:
-            raise ConfigError("tracker: levels given to the rpf filter without a tl_table")
-
-        if self._pending is None:
-            T, own_prev, own_next = 0.0, np.zeros(4), np.zeros(4)
-        else:
-            T, own_prev, own_next = self._pending
-        self._pending = None
+        Returns
+        -------
+        ParticleState
+        """
+        if not (motion_model.linear and motion_model.ndim == 4):
+            raise ConfigError("tracker: the rpf filter supports the cv model only")
         sa = self.sigma_a if self.sigma_a is not None else (
-            math.sqrt(self.model.q1 / T) if T > 0 else 0.0)
-        ww, ll, idx, src, mean, pcov, dmat = self._scratch
-        absolute = self.parts + own_prev               # eq. (4): x + x^o, then F, then − x^o'
-        r0, dr, tl = self.tl
-        s, logev, done = kpf.rpf_step(absolute, self.w, ww, self.s, ll, self.state, T, sa,
-                                      own_next[0], own_next[1], math.radians(bearing_deg),
-                                      self.sigma, float(level_db) if use_level else 0.0,
-                                      self.sigma_level, use_level, self.sl_par, r0, dr, tl,
-                                      self.n_thr, self.method, self.h, idx, src, mean, pcov,
-                                      dmat, self.v_max)
-        self.parts = absolute - own_next
-        self.s = s
-        self.n_resampled += int(done)
-        self.x = mean - own_next
-        self.P = pcov.copy()
-        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+            math.sqrt(motion_model.q1 / dt) if dt > 0 else 0.0)
+        absolute = state.particles + ctx.own_prev  # eq. (4): x + x^o, then F, then − x^o'
+        rng = state.rng.copy()
+        kpf.propagate_cv(absolute, rng, float(dt), float(sa))
+        return ParticleState(absolute - ctx.own, state.weights.copy(), state.weight_sum, rng,
+                             state.x, state.P, state.t + dt, state.n_resampled)
+
+    def update(self, state: ParticleState, z, measurement_model: MeasurementModel,
+               ctx: Context) -> tuple[ParticleState, float]:
+        """Weight by the measurement, regularize-resample if needed (eqs. (18)-(30)).
+
+        Parameters
+        ----------
+        state : ParticleState
+            Predicted cloud.
+        z : array_like
+            Measurement in the model's units.
+        measurement_model : MeasurementModel
+        ctx : Context
+
+        Returns
+        -------
+        ParticleState
+        float
+            log p(z | past measurements).
+        """
+        n = self.n_particles
+        parts = state.particles.copy()
+        w = state.weights.copy()
+        rng = state.rng.copy()
+        ll = np.empty(n)
+        measurement_model.loglik_particles(parts, np.asarray(z, float).reshape(-1), ctx, ll)
+        mean = np.empty(4)
+        pcov = np.empty((4, 4))
+        s, logev, done = kpf.rpf_correct(parts, w, np.empty(n), state.weight_sum, ll, rng,
+                                         self.n_thr, self.method, self.h,
+                                         np.empty(n, np.int64), np.empty((n, 4)), mean, pcov,
+                                         np.empty((4, 4)), self.v_max, float(ctx.own[2]),
+                                         float(ctx.own[3]))
+        if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(pcov))):
             raise FilterDivergence("rpf: non-finite state")
-        norm = math.log(math.sqrt(2 * math.pi) * self.sigma)
-        if use_level:
-            norm += math.log(math.sqrt(2 * math.pi) * self.sigma_level)
-        return float(logev - norm)
+        out = ParticleState(parts, w, s, rng, mean, pcov, state.t,
+                            state.n_resampled + int(done))
+        return out, float(logev - measurement_model.loglik_norm(ctx))

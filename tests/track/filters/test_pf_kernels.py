@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from arrayproc.track import _pf_kernels as k
+from arrayproc.track.filters import _pf_kernels as k
 from tests import pf_reference as ref
 
 SEED = 0x1234_5678_9ABC_DEF0
