@@ -14,3 +14,23 @@ class ConfigError(ArrayprocError):
 
 class FormatError(ArrayprocError):
     """A file is missing, unreadable or does not follow the expected format."""
+
+
+class Interrupted(BaseException):  # noqa: N818 - like KeyboardInterrupt, not an Exception
+    """The run was stopped by a signal (SIGINT, SIGTERM, SIGHUP).
+
+    A :class:`BaseException`, so ``except Exception`` in library code does not swallow it. The
+    command line exits with status 128 + ``signum`` (130, 143, 129).
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    def __str__(self) -> str:
+        import signal
+        try:
+            name = signal.Signals(self.signum).name
+        except ValueError:
+            name = f"signal {self.signum}"
+        return f"interrupted by {name}"

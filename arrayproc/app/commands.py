@@ -1,72 +1,484 @@
-"""Command-line commands that live outside the I/O core: simulate, plot, track, demo."""
+"""The commands of ``arrayproc`` as plain library functions with typed arguments.
+
+Each function does one command's job and returns what it made; none reads ``sys.argv`` and
+none prints except through the ``echo`` / ``warn`` callables it is given, so the demo and
+other programs call them directly. :func:`add_parser` registers their sub-commands on the
+command line (:mod:`arrayproc.app.cli`).
+
+Every command checks its output path against its inputs before any work
+(:func:`arrayproc.io.atomic.check_output`): an output that is an input (same file through a
+symlink or a hard link too) or that is not a regular file is refused. Heavy modules (scipy,
+numba kernels, matplotlib) are imported inside the commands that use them, so ``--version``
+and ``info`` start quickly.
+"""
 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from arrayproc.errors import ArrayprocError, ConfigError, FormatError
+from arrayproc.io.atomic import check_output
+
+Echo = Callable[[str], None]
 
 
-def _progress(args: argparse.Namespace) -> bool:
+def _stderr(msg: str) -> None:
+    print(f"arrayproc: warning: {msg}", file=sys.stderr)
+
+
+def _quiet(msg: str) -> None:
+    """An ``echo`` that prints nothing."""
+
+
+# -- geometry ---------------------------------------------------------------------------------
+def geometry(line: Sequence[float] | None = None, geometry_file: str | None = None):
+    """Element positions from ``--line N SPACING`` or a geometry file, else None.
+
+    Parameters
+    ----------
+    line : (N, spacing), optional
+        Uniform line array of N elements, spacing m apart.
+    geometry_file : str, optional
+        CSV (x, y, z columns) or acoular XML file of positions, m.
+
+    Returns
+    -------
+    ndarray (n, 3) or None
+        Body-frame positions, m.
+    """
+    from arrayproc.io.geometry import line_array, read_geometry
+    if line is not None:
+        n, spacing = line
+        if not (n == int(n) if _finite(n) else False) or not 1 <= n <= 1_000_000:
+            raise FormatError(f"--line N SPACING: N must be a whole number in 1..1000000, "
+                              f"got {n:g}")
+        if not (_finite(spacing) and spacing > 0):
+            raise FormatError(f"--line N SPACING: SPACING must be a finite number > 0 m, "
+                              f"got {spacing:g}")
+        return line_array(int(n), spacing)
+    if geometry_file:
+        return read_geometry(geometry_file)
+    return None
+
+
+def _finite(v: float) -> bool:
+    return v == v and v not in (float("inf"), float("-inf"))
+
+
+# -- info -------------------------------------------------------------------------------------
+def info(path: str, positions: Any = None, echo: Echo = print) -> None:
+    """Describe a recording or a products file, cheaply on any file.
+
+    Only attributes, shapes and small datasets are read (never the samples); the aperture of
+    n elements costs O(n) memory.
+
+    Parameters
+    ----------
+    path : str
+        Recording or products HDF5 file.
+    positions : (n, 3) array, optional
+        Geometry for a file that has none (acoular layout).
+    echo : callable
+        Where each line of the description goes.
+    """
+    from arrayproc.app.describe import describe
+    for line in describe(path, positions):
+        echo(line)
+
+
+# -- process ----------------------------------------------------------------------------------
+def process(recording: str, chain: str, output: str, positions: Any = None,
+            nan: str = "error", progress: bool = False, max_memory: float | None = None,
+            warn: Echo = _stderr) -> int:
+    """Run a processing chain over a recording into a products file.
+
+    Parameters
+    ----------
+    recording : str
+        Recording HDF5 file.
+    chain : str
+        Chain TOML file.
+    output : str
+        Products HDF5 file to write (atomically: it appears whole or not at all).
+    positions : (n, 3) array, optional
+        Geometry overriding or supplying the file's (m).
+    nan : {"error", "zero"}
+        NaN/Inf samples: stop, or replace by zeros with a warning.
+    progress : bool
+        Progress bar on stderr.
+    max_memory : float, optional
+        Refuse a chain whose estimated working memory exceeds this many bytes (default: half
+        the machine's RAM).
+    warn : callable
+        Where warnings go.
+
+    Returns
+    -------
+    int
+        Number of time blocks processed.
+    """
+    check_output(output, [recording, chain])
+    from arrayproc.app.resources import check_chain_memory
+    from arrayproc.config import tomllib
+    from arrayproc.io.recording import Recording
+    try:
+        with open(chain, "rb") as fh:
+            raw = tomllib.loads(fh.read().decode())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        raw = None  # load_chain below names the problem
+    with Recording(recording, positions=positions, nan=nan) as r:
+        if raw is not None:  # before any stage is built: parameters can ask for terabytes
+            check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
+        from arrayproc.app.api import load_chain, run_chain
+        from arrayproc.io.products import ProductsWriter
+        spec = load_chain(chain)  # validated before any data is read
+        with ProductsWriter(output, source=str(Path(recording).resolve()),
+                            chain=spec.text) as out:
+            n = run_chain(r, spec, out, progress=progress, log=warn)
+        if r.n_nonfinite:
+            warn(f"{recording}: {r.n_nonfinite} NaN/Inf samples replaced by zeros")
+    return n
+
+
+# -- import -----------------------------------------------------------------------------------
+def start_time_from_names(paths: Sequence[str]) -> str | None:
+    """ISO-8601 start time from a file name holding ``YYYYMMDDTHHMMSSZ``, else None."""
+    m = re.search(r"(\d{4})(\d{2})(\d{2})T(\d{2})(\d{2})(\d{2})Z", Path(paths[0]).name)
+    if not m:
+        return None
+    y, mo, d, h, mi, s = m.groups()
+    return f"{y}-{mo}-{d}T{h}:{mi}:{s}Z"
+
+
+def import_wavs(wavs: Sequence[str], output: str, positions: Any = None,
+                scale: float | None = None, sound_speed: float = 1500.0,
+                start_time: str | None = None, warn: Echo = _stderr,
+                inputs: Sequence[str] = ()) -> dict[str, Any]:
+    """Turn WAV field recordings into one recording file.
+
+    Parameters
+    ----------
+    wavs : list of str
+        One multichannel WAV or one mono WAV per hydrophone (channel order = file order).
+    output : str
+        Recording HDF5 file to write.
+    positions : (n, 3) array, optional
+        Element positions, m.
+    scale : float, optional
+        Pa per full scale (finite, non-zero); default: samples stored in full-scale units.
+    sound_speed : float
+        m/s, finite and > 0.
+    start_time : str, optional
+        ISO-8601 UTC start; default from the first file's name when it holds one.
+    warn : callable
+        Where warnings go (unequal lengths, truncated data).
+    inputs : list of str
+        Further input files (e.g. the geometry file) the output must not replace.
+
+    Returns
+    -------
+    dict
+        ``fs`` (Hz), ``n_channels``, ``n_samples``, ``format``, ``cut``.
+    """
+    check_output(output, [*wavs, *inputs])
+    if scale is not None and not (_finite(scale) and scale != 0):
+        raise FormatError(f"--scale must be a finite non-zero number of Pa per full scale, "
+                          f"got {scale:g}")
+    if not (_finite(sound_speed) and sound_speed > 0):
+        raise FormatError(f"--sound-speed must be a finite number > 0 m/s, got {sound_speed:g}")
+    from arrayproc.io.wav import import_wavs as _import
+    return _import(wavs, output, positions=positions, scale=scale, sound_speed=sound_speed,
+                   start_time=start_time or start_time_from_names(wavs), warn=warn)
+
+
+# -- simulate ---------------------------------------------------------------------------------
+def simulate(scenario: str, output: str, seed: int | None = None,
+             duration: float | None = None, progress: bool = False,
+             warn: Echo = _stderr) -> Path:
+    """Simulate a recording from a scenario TOML.
+
+    Parameters
+    ----------
+    scenario : str
+        Scenario TOML file.
+    output : str
+        Recording HDF5 file to write.
+    seed : int, optional
+        Overrides the scenario's seed (0 <= seed < 2**64).
+    duration : float, optional
+        Shortens the scenario, s (finite, > 0).
+    progress : bool
+        Progress bar on stderr.
+    warn : callable
+        Where warnings go.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    check_output(output, [scenario])
+    if seed is not None and not 0 <= seed < 2**64:
+        raise ConfigError(f"--seed must be in 0..2**64-1, got {seed}")
+    if duration is not None and not (_finite(duration) and duration > 0):
+        raise ConfigError(f"--duration must be a finite number > 0 s, got {duration:g}")
+    from arrayproc.sim.run import simulate_file
+    return simulate_file(scenario, output, seed=seed, duration=duration, progress=progress,
+                         warn=warn)
+
+
+# -- plot -------------------------------------------------------------------------------------
+PLOT_PRIORITY = ("tracks", "btr", "lofar", "contacts", "bearings")
+
+
+def default_plot_kind(path: str) -> str:
+    """The plot kind for a products file: the first of tracks, btr, lofar, contacts, bearings."""
+    from arrayproc.io.products import product_kinds
+    kinds = product_kinds(path)
+    for k in PLOT_PRIORITY:
+        if k in kinds:
+            return "track" if k == "tracks" else k
+    raise ArrayprocError(f"{path}: no plottable product (give --kind)")
+
+
+def plot(file: str, output: str, kind: str | None = None, beam: float | None = None,
+         range_db: float = 20.0, truth: bool = True) -> str:
+    """Plot a products or tracks file into an image whose format the extension names.
+
+    Parameters
+    ----------
+    file : str
+        Products or tracks HDF5 file.
+    output : str
+        Image file; its extension (``.png``, ``.pdf``, ``.svg``, …) chooses the format.
+    kind : str, optional
+        btr, lofar, track, … (default: see :func:`default_plot_kind`).
+    beam : float, optional
+        Cone angle (deg) for LOFAR.
+    range_db : float
+        Displayed dynamic range, dB (finite, > 0).
+    truth : bool
+        Overlay the truth when the file knows it.
+
+    Returns
+    -------
+    str
+        The kind plotted.
+    """
+    check_output(output, [file])
+    if not (_finite(range_db) and range_db > 0):
+        raise ArrayprocError(f"--range-db must be a finite number > 0 dB, got {range_db:g}")
+    if beam is not None and not _finite(beam):
+        raise ArrayprocError(f"--beam must be a finite cone angle in deg, got {beam:g}")
+    from arrayproc.io.atomic import commit, discard, temporary_sibling
+    fmt = _image_format(output)
+    from arrayproc.io.recording import open_h5
+    open_h5(file, "products file").close()
+    kind = kind or default_plot_kind(file)
+    options: dict[str, Any] = {"range_db": range_db}
+    if beam is not None:
+        options["beam"] = beam
+    if not truth:
+        options["truth"] = False
+    from arrayproc.plots import plot_file
+    tmp = temporary_sibling(output).with_suffix("." + fmt)
+    try:
+        plot_file(file, str(tmp), kind, **options)
+        commit(tmp, output)
+    except BaseException:
+        discard(tmp)
+        raise
+    return kind
+
+
+def _image_format(output: str) -> str:
+    """The image format the output's extension names, or ArrayprocError."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    known = Figure().canvas.get_supported_filetypes()
+    ext = Path(output).suffix.lower().lstrip(".")
+    if ext not in known:
+        raise ArrayprocError(f"{output}: plot output needs an image extension "
+                             f"({', '.join('.' + k for k in sorted(known))})")
+    return ext
+
+
+# -- track ------------------------------------------------------------------------------------
+def track(products: str, config: str, output: str, progress: bool = False) -> None:
+    """Track targets from a products file's bearings into a tracks file.
+
+    Parameters
+    ----------
+    products : str
+        Products HDF5 file with a bearings group.
+    config : str
+        Tracker TOML file.
+    output : str
+        Tracks HDF5 file to write.
+    progress : bool
+        Progress messages on stderr.
+    """
+    inputs = [products, config]
+    rec = _products_source(products)
+    if rec is not None:
+        inputs.append(rec)  # the recording whose navigation the tracker reads
+    check_output(output, inputs)
+    from arrayproc.track.runner import run_tracker
+    run_tracker(products, config, output, progress=progress)
+
+
+def _products_source(products: str) -> str | None:
+    """The recording a products file names in its ``source`` attribute (if it exists)."""
+    try:
+        from arrayproc.io.products import products_source
+        src = products_source(products)
+    except ArrayprocError:
+        return None
+    if not src:
+        return None
+    p = Path(src) if Path(src).is_absolute() else Path(products).parent / src
+    return str(p) if p.exists() else None
+
+
+# -- demo -------------------------------------------------------------------------------------
+def demo(output: str = "demo_out", progress: bool = False, echo: Echo = print) -> Path:
+    """Simulate, process, track and plot the bundled examples (see :mod:`arrayproc.app.demo`).
+
+    Parameters
+    ----------
+    output : str
+        Output directory (created; must not be an existing file).
+    progress : bool
+        Progress bars on stderr.
+    echo : callable
+        Where the steps are announced.
+
+    Returns
+    -------
+    Path
+        The output directory.
+    """
+    from arrayproc.app.demo import run_demo
+    return run_demo(output, progress=progress, echo=echo)
+
+
+# -- command line -----------------------------------------------------------------------------
+def add_geometry_options(p: argparse.ArgumentParser) -> None:
+    """``--line N SPACING`` / ``--geometry FILE`` (mutually exclusive)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--line", nargs=2, type=float, metavar=("N", "SPACING"),
+                   help="uniform line array of N elements SPACING m apart")
+    g.add_argument("--geometry", metavar="FILE",
+                   help="element positions: CSV with x,y,z columns or acoular XML")
+
+
+def _geometry_of(args: argparse.Namespace):
+    return geometry(getattr(args, "line", None), getattr(args, "geometry", None))
+
+
+def _geometry_inputs(args: argparse.Namespace) -> list[str]:
+    return [args.geometry] if getattr(args, "geometry", None) else []
+
+
+def progress_wanted(args: argparse.Namespace) -> bool:
+    """A progress bar unless ``--no-progress`` or stderr is not a terminal."""
     return not getattr(args, "no_progress", False) and sys.stderr.isatty()
 
 
-def cmd_simulate(args: argparse.Namespace) -> int:
-    from arrayproc.app.cli import warn
-    from arrayproc.sim.run import simulate_file
-    simulate_file(args.scenario, args.output, seed=args.seed, duration=args.duration,
-                  progress=_progress(args), warn=warn)
+def _run_info(args: argparse.Namespace) -> int:
+    info(args.file, positions=_geometry_of(args))
+    return 0
+
+
+def _run_process(args: argparse.Namespace) -> int:
+    from arrayproc.app.resources import parse_bytes
+    check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
+    limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
+                nan=args.nan, progress=progress_wanted(args), max_memory=limit)
+    if not args.quiet:
+        print(f"{args.output}: {n} blocks processed")
+    return 0
+
+
+def _run_import(args: argparse.Namespace) -> int:
+    check_output(args.output, [*args.wav, *_geometry_inputs(args)])
+    r = import_wavs(args.wav, args.output, positions=_geometry_of(args), scale=args.scale,
+                    sound_speed=args.sound_speed, start_time=args.start_time,
+                    inputs=_geometry_inputs(args))
+    if not args.quiet:
+        print(f"{args.output}: {r['n_channels']} channels, {r['n_samples']} samples at "
+              f"{r['fs']} Hz ({r['format']})")
+    return 0
+
+
+def _run_simulate(args: argparse.Namespace) -> int:
+    simulate(args.scenario, args.output, seed=args.seed, duration=args.duration,
+             progress=progress_wanted(args))
     if not args.quiet:
         print(f"{args.output}: written")
     return 0
 
 
-def cmd_plot(args: argparse.Namespace) -> int:
-    from arrayproc.errors import ArrayprocError
-    from arrayproc.io.atomic import commit, discard, temporary_sibling
-    from arrayproc.plots import plot_file
-    kind = args.kind or _default_kind(args.file)
-    options = {"range_db": args.range_db}
-    if args.beam is not None:
-        options["beam"] = args.beam
-    if args.no_truth:
-        options["truth"] = False
-    tmp = temporary_sibling(args.output).with_suffix(".png")
-    try:
-        plot_file(args.file, str(tmp), kind, **options)
-        commit(tmp, args.output)
-    except BaseException:
-        discard(tmp)
-        raise
-    if not tmp.parent.exists():
-        raise ArrayprocError(f"{args.output}: directory vanished")
+def _run_plot(args: argparse.Namespace) -> int:
+    kind = plot(args.file, args.output, kind=args.kind, beam=args.beam,
+                range_db=args.range_db, truth=not args.no_truth)
     print(f"{args.output}: {kind} plot written")
     return 0
 
 
-def _default_kind(path: str) -> str:
-    from arrayproc.io.products import read_products
-    kinds = [g["kind"] for n, g in read_products(path).items() if n != "/"]
-    for k in ("tracks", "btr", "lofar", "contacts", "bearings"):
-        if k in kinds:
-            return "track" if k == "tracks" else k
-    from arrayproc.errors import ArrayprocError
-    raise ArrayprocError(f"{path}: no plottable product (give --kind)")
-
-
-def cmd_track(args: argparse.Namespace) -> int:
-    from arrayproc.track.runner import run_tracker
-    run_tracker(args.products, args.config, args.output, progress=_progress(args))
+def _run_track(args: argparse.Namespace) -> int:
+    track(args.products, args.config, args.output, progress=progress_wanted(args))
     print(f"{args.output}: tracks written")
     return 0
 
 
-def cmd_demo(args: argparse.Namespace) -> int:
-    from arrayproc.app.demo import run_demo
-    run_demo(args.output, progress=_progress(args))
+def _run_demo(args: argparse.Namespace) -> int:
+    demo(args.output, progress=progress_wanted(args))
     return 0
 
 
-def add_to(sub) -> None:
+def add_parser(sub: Any) -> None:
+    """Register this module's sub-commands (info, process, import, simulate, plot, track,
+    demo) on the command line's sub-parsers."""
+    s = sub.add_parser("info", help="describe a recording or products file")
+    s.add_argument("file")
+    add_geometry_options(s)
+    s.add_argument("--nan", choices=("error", "zero"), default="error", help=argparse.SUPPRESS)
+    s.set_defaults(func=_run_info)
+
+    s = sub.add_parser("process", help="run a processing chain over a recording")
+    s.add_argument("recording")
+    s.add_argument("-c", "--chain", required=True, help="chain TOML file")
+    s.add_argument("-o", "--output", required=True, help="products HDF5 file to write")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.add_argument("-q", "--quiet", action="store_true")
+    s.add_argument("--max-memory", default=None, metavar="SIZE",
+                   help="refuse a chain whose estimated working memory exceeds SIZE (bytes, or "
+                        "with a unit: 500M, 4G; default: half the machine's RAM)")
+    add_geometry_options(s)
+    s.add_argument("--nan", choices=("error", "zero"), default="error",
+                   help="NaN/Inf samples: stop with an error (default) or zero them")
+    s.set_defaults(func=_run_process)
+
+    s = sub.add_parser("import", help="turn WAV field recordings into a recording file")
+    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone")
+    s.add_argument("-o", "--output", required=True)
+    s.add_argument("--scale", type=float, default=None,
+                   help="pascals per full scale (default: store full-scale units)")
+    s.add_argument("--sound-speed", type=float, default=1500.0, help="m/s (default 1500)")
+    s.add_argument("--start-time", default=None, help="ISO-8601 UTC start (default: from the "
+                   "file name when it holds one, e.g. 20190920T163858Z)")
+    s.add_argument("-q", "--quiet", action="store_true")
+    add_geometry_options(s)
+    s.set_defaults(func=_run_import)
+
     s = sub.add_parser("simulate", help="simulate a recording from a scenario TOML")
     s.add_argument("scenario")
     s.add_argument("-o", "--output", required=True)
@@ -74,7 +486,7 @@ def add_to(sub) -> None:
     s.add_argument("--duration", type=float, default=None, help="shorten the scenario (s)")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("-q", "--quiet", action="store_true")
-    s.set_defaults(func=cmd_simulate)
+    s.set_defaults(func=_run_simulate)
 
     s = sub.add_parser("plot", help="plot a products or tracks file")
     s.add_argument("file")
@@ -82,17 +494,18 @@ def add_to(sub) -> None:
     s.add_argument("--beam", type=float, default=None, help="cone angle (deg) for LOFAR")
     s.add_argument("--range-db", type=float, default=20.0, help="displayed dynamic range, dB")
     s.add_argument("--no-truth", action="store_true", help="no truth overlay")
-    s.add_argument("-o", "--output", required=True, help="PNG file")
-    s.set_defaults(func=cmd_plot)
+    s.add_argument("-o", "--output", required=True,
+                   help="image file; the extension names the format (.png, .pdf, .svg, …)")
+    s.set_defaults(func=_run_plot)
 
     s = sub.add_parser("track", help="track targets from a products file's measurements")
     s.add_argument("products")
     s.add_argument("-c", "--config", required=True, help="tracker TOML file")
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--no-progress", action="store_true")
-    s.set_defaults(func=cmd_track)
+    s.set_defaults(func=_run_track)
 
     s = sub.add_parser("demo", help="simulate, process, track and plot the bundled example")
     s.add_argument("-o", "--output", default="demo_out", help="output directory")
     s.add_argument("--no-progress", action="store_true")
-    s.set_defaults(func=cmd_demo)
+    s.set_defaults(func=_run_demo)

@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
-from arrayproc.app.cli import main as cli_main
+from arrayproc.app import commands
 from arrayproc.data import data_path
+from arrayproc.errors import FormatError
 
 DATA = data_path()
 
@@ -38,49 +40,85 @@ def field_recording_dir() -> Path | None:
     return None
 
 
-def _run(args: list[str]) -> None:
-    print("$ arrayproc " + " ".join(args), flush=True)
-    rc = cli_main(args)
-    if rc:
-        raise SystemExit(rc)
-
-
-def run_demo(outdir: str = "demo_out", progress: bool = False) -> None:
+def _output_dir(outdir: str | os.PathLike) -> Path:
     out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
-    np_ = [] if progress else ["--no-progress"]
+    if not str(outdir).strip():
+        raise FormatError("demo: output directory is empty")
+    if out.exists() and not out.is_dir():
+        raise FormatError(f"{out}: exists and is not a directory; give a directory for the "
+                          "demo outputs")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise FormatError(f"{out}: cannot create the demo directory ({e.strerror})") from None
+    return out
+
+
+def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
+             echo: Callable[[str], None] = print) -> Path:
+    """Run the demo: each step calls the library function of the matching command.
+
+    Parameters
+    ----------
+    outdir : path-like
+        Output directory (created; an existing file is refused).
+    progress : bool
+        Progress bars on stderr.
+    echo : callable
+        Where each step and each file's description are announced.
+
+    Returns
+    -------
+    Path
+        The output directory.
+    """
+    out = _output_dir(outdir)
+    step = echo
+
     scenario = DATA / "scenarios" / "towed_passive.toml"
     chain = DATA / "chains" / "towed_passive.toml"
     if scenario.exists() and chain.exists():
         rec = out / "towed_passive.h5"
         prod = out / "towed_passive_products.h5"
-        _run(["simulate", str(scenario), "-o", str(rec), *np_])
-        _run(["process", str(rec), "-c", str(chain), "-o", str(prod), *np_])
-        _run(["info", str(prod)])
-        _run(["plot", str(prod), "--kind", "btr", "-o", str(out / "btr.png")])
-        _run(["plot", str(prod), "--kind", "lofar", "--beam", "56", "-o",
-              str(out / "lofar.png")])
+        step(f"simulate {scenario.name} -> {rec}")
+        commands.simulate(str(scenario), str(rec), progress=progress)
+        step(f"process {rec.name} with {chain.name} -> {prod}")
+        commands.process(str(rec), str(chain), str(prod), progress=progress)
+        commands.info(str(prod), echo=echo)
+        step(f"plot btr -> {out / 'btr.png'}")
+        commands.plot(str(prod), str(out / "btr.png"), kind="btr")
+        step(f"plot lofar (beam 56 deg) -> {out / 'lofar.png'}")
+        commands.plot(str(prod), str(out / "lofar.png"), kind="lofar", beam=56.0)
         tracks = out / "towed_passive_tracks.h5"
-        _run(["track", str(prod), "-c", str(DATA / "trackers" / "towed_demo.toml"), "-o",
-              str(tracks), *np_])
-        _run(["plot", str(tracks), "--kind", "track", "-o", str(out / "track.png")])
+        tracker = DATA / "trackers" / "towed_demo.toml"
+        step(f"track {prod.name} with {tracker.name} -> {tracks}")
+        commands.track(str(prod), str(tracker), str(tracks), progress=progress)
+        step(f"plot track -> {out / 'track.png'}")
+        commands.plot(str(tracks), str(out / "track.png"), kind="track")
     scenario = DATA / "scenarios" / "towed_synthetic_aperture.toml"
     if scenario.exists():
         rec = out / "synthetic_aperture.h5"
-        _run(["simulate", str(scenario), "-o", str(rec), *np_])
+        step(f"simulate {scenario.name} -> {rec}")
+        commands.simulate(str(scenario), str(rec), progress=progress)
         for name in ("cbf_narrowband", "ibf_etam"):
             prod = out / f"synthetic_aperture_{name}.h5"
-            _run(["process", str(rec), "-c", str(DATA / "chains" / f"{name}.toml"), "-o",
-                  str(prod), *np_])
-            _run(["plot", str(prod), "--kind", "btr", "-o", str(out / f"btr_{name}.png")])
+            step(f"process {rec.name} with {name}.toml -> {prod}")
+            commands.process(str(rec), str(DATA / "chains" / f"{name}.toml"), str(prod),
+                             progress=progress)
+            step(f"plot btr -> {out / f'btr_{name}.png'}")
+            commands.plot(str(prod), str(out / f"btr_{name}.png"), kind="btr")
     xav = field_recording_dir()
     if xav is not None:
         wavs = sorted(str(p) for p in xav.glob("AMAR173.*.wav"))
+        geometry = xav / "hydrophones_config_07-HI.csv"
         rec = out / "xav.h5"
-        _run(["import", *wavs, "--geometry", str(xav / "hydrophones_config_07-HI.csv"),
-              "--sound-speed", "1484", "-o", str(rec)])
-        _run(["info", str(rec)])
-        _run(["process", str(rec), "-c", str(DATA / "chains" / "power.toml"), "-o",
-              str(out / "xav_power.h5"), *np_])
-        _run(["info", str(out / "xav_power.h5")])
+        step(f"import {len(wavs)} WAV files from {xav} -> {rec}")
+        commands.import_wavs(wavs, str(rec), positions=commands.geometry(
+            geometry_file=str(geometry)), sound_speed=1484.0, inputs=[str(geometry)])
+        commands.info(str(rec), echo=echo)
+        step(f"process {rec.name} with power.toml -> {out / 'xav_power.h5'}")
+        commands.process(str(rec), str(DATA / "chains" / "power.toml"),
+                         str(out / "xav_power.h5"), progress=progress)
+        commands.info(str(out / "xav_power.h5"), echo=echo)
     print(f"demo outputs in {out}/", file=sys.stderr)
+    return out

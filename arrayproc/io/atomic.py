@@ -1,21 +1,120 @@
-"""Write-then-rename: an output file appears whole or not at all."""
+"""Write-then-rename: an output file appears whole or not at all, never over an input.
+
+* :func:`check_output` refuses, before any work, an output path that is one of the inputs
+  (the same file through a symlink or a hard link too: :func:`os.path.samefile`) or that names
+  something other than a regular file (a directory, a device such as ``/dev/null``, a FIFO, a
+  socket, the empty string).
+* Every temporary file is registered while it lives; :func:`discard_all` removes those left
+  when a run stops (an error, a signal), so no hidden ``.part`` file is left behind.
+* A stop requested from a signal handler (:func:`request_stop`) is remembered here and checked
+  by every writer on each append and before the final rename (:func:`check_stop`): even when the
+  exception raised by the handler is swallowed (Python drops exceptions raised inside weakref
+  callbacks and ``__del__``), the run stops at the next write and never commits its output.
+"""
 
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
+import threading
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import h5py
+from arrayproc.errors import FormatError, Interrupted
 
-from arrayproc.errors import FormatError
+_LIVE: set[Path] = set()
+_LOCK = threading.Lock()
+_STOP: list[int] = []  # signal numbers requested, first one wins
 
 
+# -- stop requests ----------------------------------------------------------------------------
+def request_stop(signum: int) -> None:
+    """Remember that the run must stop (called from a signal handler)."""
+    if not _STOP:
+        _STOP.append(int(signum))
+
+
+def stop_requested() -> int | None:
+    """The signal number of a pending stop request, else None."""
+    return _STOP[0] if _STOP else None
+
+
+def clear_stop() -> None:
+    """Forget a stop request (a new run in the same process)."""
+    _STOP.clear()
+
+
+def check_stop() -> None:
+    """Raise :class:`Interrupted` when a stop was requested."""
+    if _STOP:
+        raise Interrupted(_STOP[0])
+
+
+# -- output paths -----------------------------------------------------------------------------
+def check_output(output: str | os.PathLike, inputs: Iterable[str | os.PathLike] = ()) -> Path:
+    """Refuse an output path that would destroy an input or is not a regular file.
+
+    Parameters
+    ----------
+    output : path-like
+        The file a command will write (replaced atomically when it exists).
+    inputs : iterable of path-like
+        Every file the command reads.
+
+    Returns
+    -------
+    Path
+        The output path.
+
+    Raises
+    ------
+    FormatError
+        The output is empty, names a directory, a device, a FIFO or a socket, or is the same
+        file as an input (compared by device and inode, so symlinks and hard links count).
+    """
+    text = os.fspath(output)
+    if not text.strip():
+        raise FormatError("output path is empty")
+    path = Path(text)
+    if text.endswith(os.sep) or path.name in ("", ".", ".."):
+        raise FormatError(f"{text}: output must be a file name, not a directory")
+    try:
+        st = os.stat(path)  # follows symlinks: what the target really is
+    except FileNotFoundError:
+        st = None
+    except OSError as e:
+        raise FormatError(f"{text}: cannot check the output path ({e.strerror})") from None
+    if st is not None:
+        if stat.S_ISDIR(st.st_mode):
+            raise FormatError(f"{text}: is a directory; give a file name for the output")
+        if not stat.S_ISREG(st.st_mode):
+            kind = ("a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else
+                    "a FIFO" if stat.S_ISFIFO(st.st_mode) else
+                    "a socket" if stat.S_ISSOCK(st.st_mode) else "not a regular file")
+            raise FormatError(f"{text}: is {kind}; outputs must be regular files")
+        for inp in inputs:
+            if inp is None or not os.fspath(inp):
+                continue
+            try:
+                same = os.path.samefile(path, inp)
+            except OSError:
+                continue
+            if same:
+                raise FormatError(f"{text}: output is the same file as the input {os.fspath(inp)}"
+                                  "; refusing to overwrite an input")
+    elif path.is_symlink():
+        raise FormatError(f"{text}: is a dangling symbolic link; refusing to write through it")
+    return path
+
+
+# -- temporary files --------------------------------------------------------------------------
 def temporary_sibling(target: str | os.PathLike) -> Path:
     """A fresh temporary path in the target's directory (so the final rename is atomic).
 
-    Raises FormatError naming the directory when it does not exist or is not writable.
+    The path is registered until :func:`commit` or :func:`discard`. Raises FormatError naming
+    the directory when it does not exist or is not writable.
     """
     target = Path(target)
     directory = target.parent if str(target.parent) else Path(".")
@@ -27,12 +126,23 @@ def temporary_sibling(target: str | os.PathLike) -> Path:
         raise FormatError(f"{target}: cannot write in {directory}: {e.strerror}") from None
     os.close(fd)
     os.unlink(tmp)  # h5py creates the file itself
-    return Path(tmp)
+    tmp_path = Path(tmp)
+    register(tmp_path)
+    return tmp_path
+
+
+def register(tmp: Path) -> None:
+    """Track a temporary file so :func:`discard_all` removes it if the run stops."""
+    with _LOCK:
+        _LIVE.add(Path(tmp))
 
 
 def commit(tmp: Path, target: str | os.PathLike) -> None:
-    """Move the finished temporary file onto the target."""
+    """Move the finished temporary file onto the target (unless a stop was requested)."""
+    check_stop()
     os.replace(tmp, target)
+    with _LOCK:
+        _LIVE.discard(Path(tmp))
 
 
 def discard(tmp: Path) -> None:
@@ -41,25 +151,65 @@ def discard(tmp: Path) -> None:
         os.unlink(tmp)
     except FileNotFoundError:
         pass
+    with _LOCK:
+        _LIVE.discard(Path(tmp))
+
+
+def discard_all() -> list[Path]:
+    """Remove every registered temporary file (end of a failed or interrupted run).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    with _LOCK:
+        live = list(_LIVE)
+    for p in live:
+        discard(p)
+    return live
 
 
 class AtomicH5Writer:
     """An HDF5 file written under a temporary name beside ``path``: :meth:`close` moves it into
-    place, :meth:`abort` (or an exception inside a ``with`` block) removes it."""
+    place, :meth:`abort` (or an exception inside a ``with`` block) removes it.
 
-    def __init__(self, path: str | os.PathLike) -> None:
+    Subclasses do their set-up in :meth:`_start`; when it fails, the temporary file is removed
+    before the error propagates (a constructor never leaks a ``.part`` file).
+    """
+
+    def __init__(self, path: str | os.PathLike, *args: Any, **kwargs: Any) -> None:
+        import h5py
         self.path = Path(path)
+        check_stop()
         self._tmp = temporary_sibling(self.path)
-        self._f = h5py.File(self._tmp, "w")
+        try:
+            self._f = h5py.File(self._tmp, "w")
+        except BaseException:
+            discard(self._tmp)
+            raise
+        try:
+            self._start(*args, **kwargs)
+        except BaseException:
+            self.abort()
+            raise
+
+    def _start(self) -> None:
+        """Set-up of a subclass after the file is created."""
 
     def _finish(self) -> None:
         """Last writes before the file is closed (subclasses)."""
 
     def close(self) -> None:
         """Finish the file and move it into place."""
-        self._finish()
-        self._f.close()
-        commit(self._tmp, self.path)
+        try:
+            check_stop()
+            self._finish()
+            self._f.close()
+            commit(self._tmp, self.path)
+        except BaseException:
+            self.abort()
+            raise
 
     def abort(self) -> None:
         """Drop the partial file."""

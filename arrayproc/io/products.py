@@ -16,7 +16,7 @@ import numpy as np
 
 from arrayproc import __version__
 from arrayproc.errors import FormatError
-from arrayproc.io.atomic import AtomicH5Writer
+from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.recording import open_h5
 
 FORMAT = "arrayproc.products"
@@ -54,6 +54,7 @@ class GroupWriter:
 
     def append(self, **columns: np.ndarray) -> None:
         """Append rows: every column has the same length along its first axis."""
+        check_stop()
         cols = {k: np.asarray(v) for k, v in columns.items()}
         lengths = {v.shape[0] if v.ndim else 1 for v in cols.values()}
         if len(lengths) != 1:
@@ -90,7 +91,10 @@ class ProductsWriter(AtomicH5Writer):
     def __init__(self, path: str | os.PathLike, source: str = "", chain: str = "",
                  time_window: tuple[float, float] | None = None,
                  attrs: dict[str, Any] | None = None) -> None:
-        super().__init__(path)
+        super().__init__(path, source, chain, time_window, attrs)
+
+    def _start(self, source: str, chain: str, time_window: tuple[float, float] | None,
+               attrs: dict[str, Any] | None) -> None:
         a = self._f.attrs
         a["format"] = FORMAT
         a["format_version"] = FORMAT_VERSION
@@ -108,6 +112,9 @@ class ProductsWriter(AtomicH5Writer):
         """The writer for group ``name`` (created on first use) of product ``kind``."""
         if name in self._groups:
             return self._groups[name]
+        if not name or "/" in name or name in (".", ".."):
+            raise FormatError(f"{self.path}: products group name {name!r} is not a plain name "
+                              "(no '/', not '.' or '..')")
         g = self._f.create_group(name)
         g.attrs["kind"] = kind
         g.attrs["stage"] = stage or name
@@ -126,6 +133,34 @@ def is_products(path: str | os.PathLike) -> bool:
     with open_h5(path) as f:
         fmt = f.attrs.get("format", "")
         return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == FORMAT
+
+
+def product_kinds(path: str | os.PathLike) -> list[str]:
+    """The ``kind`` attribute of every group of a products file, in file order (no data read).
+
+    Raises FormatError when the file is not an arrayproc products file.
+    """
+    with open_h5(path, "products file") as f:
+        if _attr_str(f.attrs.get("format", "")) != FORMAT:
+            raise FormatError(f"{path}: not an arrayproc products file")
+        return [_attr_str(g.attrs.get("kind", "")) for g in f.values()
+                if isinstance(g, h5py.Group)]
+
+
+def products_source(path: str | os.PathLike) -> str:
+    """The root attribute ``source`` of a products file (the recording it was made from)."""
+    with open_h5(path, "products file") as f:
+        return _attr_str(f.attrs.get("source", ""))
+
+
+def _attr_str(v: Any) -> str:
+    if isinstance(v, bytes):
+        return v.decode(errors="replace")
+    if isinstance(v, str):
+        return v
+    if isinstance(v, np.ndarray) and v.size == 1:
+        return _attr_str(v.reshape(-1)[0])
+    return str(v) if isinstance(v, (np.generic, int, float)) else ""
 
 
 def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:

@@ -9,23 +9,22 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 
-from arrayproc.chain.block import Block, Pose
-from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import FormatError
+from arrayproc.geo.pose import Pose
 from arrayproc.geo.nav import Nav
-from arrayproc.io.atomic import AtomicH5Writer
+from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.geometry import body_to_world
 
 FORMAT = "arrayproc.recording"
 FORMAT_VERSION = 1
 DEFAULT_SOUND_SPEED = 1500.0
-SLAB_BYTES = 8 << 20  # hyperslab size the reader pulls at once
 
 
 def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
@@ -35,18 +34,122 @@ def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
         raise FormatError(f"{path}: no such {what}")
     if path.is_dir():
         raise FormatError(f"{path}: is a directory, not an HDF5 {what}")
+    if not path.is_file():
+        raise FormatError(f"{path}: is not a regular file (a device, FIFO or socket), not an "
+                          f"HDF5 {what}")
     try:
         if not h5py.is_hdf5(path):
             raise FormatError(f"{path}: not an HDF5 file")
         return h5py.File(path, "r")
     except FormatError:
         raise
+    except PermissionError:
+        raise FormatError(f"{path}: permission denied") from None
     except OSError as e:
-        raise FormatError(f"{path}: cannot open HDF5 file (truncated or corrupt?): {e}") from None
+        text = str(e)
+        if "lock" in text or "already open" in text or "errno = 11" in text:
+            raise FormatError(f"{path}: the file is held open by a writer (it may still be "
+                              "being written); try again when the writer has finished") from None
+        raise FormatError(f"{path}: cannot open HDF5 file (truncated or corrupt, or still "
+                          f"being written?): {text.splitlines()[0] if text else e!r}") from None
 
 
 def _attr_str(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
+    if isinstance(v, np.ndarray) and v.size == 1:
+        v = v.reshape(-1)[0]
+    return v.decode(errors="replace") if isinstance(v, bytes) else str(v)
+
+
+def attr_number(p: Path, obj: Any, key: str, default: float | None = None) -> float:
+    """A numeric attribute (a number or a one-element numeric array) as a float.
+
+    Strings, empty arrays, arrays of several values and non-numeric types raise one
+    FormatError naming the file and the attribute.
+    """
+    if key not in obj.attrs:
+        if default is None:
+            raise FormatError(f"{p}: attribute {key!r} is missing")
+        return float(default)
+    try:
+        v = obj.attrs[key]
+    except (OSError, TypeError, ValueError) as e:
+        raise FormatError(f"{p}: attribute {key!r} cannot be read ({e})") from None
+    a = np.asarray(v)
+    if a.dtype.kind not in "fiub" or a.size != 1:
+        raise FormatError(f"{p}: attribute {key!r} must be one number, got {_show(v)}")
+    return float(a.reshape(-1)[0])
+
+
+def _show(v: Any) -> str:
+    text = repr(v)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def get_object(f: h5py.File, p: Path, name: str, kind: type | None = None) -> Any:
+    """The object at ``name`` (None when absent); dangling soft or external links and objects
+    of the wrong kind (a dataset where a group belongs, or the reverse) raise FormatError."""
+    try:
+        link = f.get(name, getlink=True)
+    except (KeyError, OSError, ValueError, TypeError):
+        link = None
+    if link is None:
+        return None
+    try:
+        obj = f[name]
+    except (KeyError, OSError, ValueError) as e:
+        what = ("external link" if isinstance(link, h5py.ExternalLink) else "soft link"
+                if isinstance(link, h5py.SoftLink) else "object")
+        raise FormatError(f"{p}: /{name.lstrip('/')} is a dangling {what} ({e})") from None
+    if kind is not None and not isinstance(obj, kind):
+        want = "a group" if kind is h5py.Group else "a dataset"
+        raise FormatError(f"{p}: /{name.lstrip('/')} must be {want}")
+    return obj
+
+
+def read_numeric(f: h5py.File, p: Path, name: str, required: bool = False) -> np.ndarray | None:
+    """A numeric dataset as a float64 array (None when absent and not required)."""
+    d = get_object(f, p, name, h5py.Dataset)
+    if d is None:
+        if required:
+            raise FormatError(f"{p}: /{name} is missing")
+        return None
+    if d.dtype.kind not in "fiub":
+        raise FormatError(f"{p}: /{name} must be numeric, has type {d.dtype}")
+    if d.size > 50_000_000:
+        raise FormatError(f"{p}: /{name} is implausibly large ({d.shape})")
+    try:
+        return np.asarray(d[()], dtype=float)
+    except (OSError, ValueError, TypeError) as e:
+        raise FormatError(f"{p}: /{name} cannot be read ({e})") from None
+
+
+@dataclass(frozen=True)
+class Replica:
+    """A transmitted waveform from ``/active/waveforms/<name>`` (DESIGN section 4).
+
+    ``samples`` float64 at ``fs`` (the recording's rate), sample 0 at the transmission start;
+    ``kind`` (bpsk, hfm, cw, lfm or other), ``fc`` centre frequency (Hz), ``bandwidth`` (Hz),
+    ``duration`` (s), ``bits`` (BPSK, else 0).
+    """
+
+    samples: np.ndarray
+    fs: float
+    kind: str
+    fc: float
+    bandwidth: float
+    duration: float
+    bits: int = 0
+
+
+@dataclass(frozen=True)
+class ActivePings:
+    """The ping schedule of ``/active``: transmission times (s), the waveform name of each
+    ping, the replicas by name and the projector's body-frame position (m)."""
+
+    time: np.ndarray
+    waveform: list[str]
+    waveforms: dict[str, Replica]
+    projector: np.ndarray
 
 
 class Recording:
@@ -70,7 +173,8 @@ class Recording:
     """
 
     def __init__(self, path: str | os.PathLike, positions: np.ndarray | None = None,
-                 nan: str = "error", sound_speed: float | None = None) -> None:
+                 nan: str = "error", sound_speed: float | None = None,
+                 require_geometry: bool = True) -> None:
         self.path = Path(path)
         if nan not in ("error", "zero"):
             raise FormatError(f"nan policy must be 'error' or 'zero', not {nan!r}")
@@ -78,17 +182,18 @@ class Recording:
         self.n_nonfinite = 0
         self._f = open_h5(self.path, "recording")
         try:
-            self._load(positions, sound_speed)
-        except Exception:
+            self._load(positions, sound_speed, require_geometry)
+        except BaseException:
             self._f.close()
             raise
 
     # -- metadata ------------------------------------------------------------------------
-    def _load(self, positions: np.ndarray | None, sound_speed: float | None) -> None:
+    def _load(self, positions: np.ndarray | None, sound_speed: float | None,
+              require_geometry: bool = True) -> None:
         f, p = self._f, self.path
-        if "time_data" not in f or not isinstance(f["time_data"], h5py.Dataset):
+        td = get_object(f, p, "time_data")
+        if not isinstance(td, h5py.Dataset):
             raise FormatError(f"{p}: no /time_data dataset (not a recording)")
-        td = f["time_data"]
         if td.ndim != 2:
             raise FormatError(f"{p}: /time_data must be 2-D (samples, channels), has shape "
                               f"{td.shape}")
@@ -98,33 +203,43 @@ class Recording:
         self.n_samples, n_all = (int(s) for s in td.shape)
         if "sample_freq" not in td.attrs:
             raise FormatError(f"{p}: /time_data has no sample_freq attribute")
-        self.fs = float(np.asarray(td.attrs["sample_freq"]).reshape(-1)[0])
+        self.fs = attr_number(p, td, "sample_freq")
         if not np.isfinite(self.fs) or self.fs <= 0:
             raise FormatError(f"{p}: sample_freq must be a positive number, got {self.fs}")
         self.units = _attr_str(td.attrs.get("units", "Pa"))
         fmt = _attr_str(f.attrs.get("format", ""))
         self.layout = "arrayproc" if fmt == FORMAT else "acoular"
-        self.format_version = int(f.attrs.get("format_version", 0)) if fmt == FORMAT else None
+        self.format_version = None
+        if fmt == FORMAT:
+            v = attr_number(p, f, "format_version", 0)
+            if not (np.isfinite(v) and v == int(v) and v >= 0):
+                raise FormatError(f"{p}: attribute 'format_version' must be a whole number, "
+                                  f"got {v}")
+            self.format_version = int(v)
         if self.format_version is not None and self.format_version > FORMAT_VERSION:
             raise FormatError(f"{p}: recording format version {self.format_version} is newer "
                               f"than this arrayproc reads ({FORMAT_VERSION})")
-        c = sound_speed if sound_speed is not None else f.attrs.get("sound_speed",
-                                                                    DEFAULT_SOUND_SPEED)
-        self.sound_speed = float(c)
+        self.sound_speed = (float(sound_speed) if sound_speed is not None else
+                            attr_number(p, f, "sound_speed", DEFAULT_SOUND_SPEED))
         if not (np.isfinite(self.sound_speed) and self.sound_speed > 0):
             raise FormatError(f"{p}: sound_speed must be positive, got {self.sound_speed}")
         self.start_time = _attr_str(f.attrs["start_time"]) if "start_time" in f.attrs else None
 
         # Geometry of all channels, then the active subset.
+        get_object(f, p, "array", h5py.Group)
+        file_pos = read_numeric(f, p, "array/positions")
         if positions is not None:
             pos = np.asarray(positions, dtype=float)
             self.geometry_source = "given"
-        elif "array/positions" in f:
-            pos = np.asarray(f["array/positions"][()], dtype=float)
+        elif file_pos is not None:
+            pos = file_pos
             self.geometry_source = "file"
         elif n_all == 1:
             pos = np.zeros((1, 3))
             self.geometry_source = "single channel"
+        elif not require_geometry:
+            pos = np.full((n_all, 3), np.nan)
+            self.geometry_source = "none"
         else:
             raise FormatError(f"{p}: no /array/positions; give the geometry (e.g. --line N "
                               "SPACING or --geometry FILE)")
@@ -134,16 +249,18 @@ class Recording:
         if pos.shape[0] != n_all:
             raise FormatError(f"{p}: array positions have {pos.shape[0]} rows but /time_data "
                               f"has {n_all} channels")
-        if not np.all(np.isfinite(pos)):
+        if self.geometry_source != "none" and not np.all(np.isfinite(pos)):
             raise FormatError(f"{p}: array positions contain NaN or Inf")
         gains = np.ones(n_all)
-        if "array/gains" in f:
-            gains = np.asarray(f["array/gains"][()], dtype=float).reshape(-1)
+        g = read_numeric(f, p, "array/gains")
+        if g is not None:
+            gains = g.reshape(-1)
             if gains.shape != (n_all,) or not np.all(np.isfinite(gains)):
                 raise FormatError(f"{p}: /array/gains must be {n_all} finite numbers")
         dead = np.zeros(n_all, dtype=bool)
-        if "array/dead" in f:
-            dead = np.asarray(f["array/dead"][()], dtype=bool).reshape(-1)
+        d = read_numeric(f, p, "array/dead")
+        if d is not None:
+            dead = d.astype(bool).reshape(-1)
             if dead.shape != (n_all,):
                 raise FormatError(f"{p}: /array/dead must have {n_all} entries")
         if dead.all():
@@ -160,16 +277,13 @@ class Recording:
 
     def _read_nav(self) -> Nav:
         f, p = self._f, self.path
-        if "nav" not in f:
+        if get_object(f, p, "nav", h5py.Group) is None:
             return Nav.static()
-        g = f["nav"]
-        for k in ("time", "position", "heading"):
-            if k not in g:
-                raise FormatError(f"{p}: /nav/{k} is missing")
-        t = np.asarray(g["time"][()], dtype=float).reshape(-1)
-        pos = np.asarray(g["position"][()], dtype=float)
-        hd = np.asarray(g["heading"][()], dtype=float).reshape(-1)
-        dp = np.asarray(g["depth"][()], dtype=float).reshape(-1) if "depth" in g else None
+        t = read_numeric(f, p, "nav/time", required=True).reshape(-1)
+        pos = read_numeric(f, p, "nav/position", required=True)
+        hd = read_numeric(f, p, "nav/heading", required=True).reshape(-1)
+        dp = read_numeric(f, p, "nav/depth")
+        dp = dp.reshape(-1) if dp is not None else None
         if t.size == 0:
             raise FormatError(f"{p}: /nav/time is empty")
         if np.any(np.diff(t) <= 0):
@@ -195,17 +309,73 @@ class Recording:
         return self.n_samples / self.fs
 
     def has(self, name: str) -> bool:
-        """Whether the file holds an object at ``name`` (e.g. ``"truth"``)."""
-        return name in self._f
+        """Whether the file holds an object at ``name`` (e.g. ``"truth"``); a dangling link
+        raises FormatError."""
+        try:
+            return get_object(self._f, self.path, name) is not None
+        except FormatError:
+            raise
+        except (KeyError, OSError, ValueError, TypeError):
+            return False
 
     def read_group(self, name: str) -> dict[str, Any]:
-        """Every dataset below ``name`` as numpy arrays (nested dicts), attrs under ``"attrs"``."""
-        def walk(g: h5py.Group) -> dict[str, Any]:
+        """Every dataset below ``name`` as numpy arrays (nested dicts), attrs under ``"attrs"``.
+
+        Raises FormatError when ``name`` is not a group or holds a dangling link.
+        """
+        def walk(g: h5py.Group, where: str) -> dict[str, Any]:
             out: dict[str, Any] = {"attrs": dict(g.attrs)}
-            for k, v in g.items():
-                out[k] = walk(v) if isinstance(v, h5py.Group) else v[()]
+            for k in g:
+                v = get_object(self._f, self.path, f"{where}/{k}")
+                out[k] = walk(v, f"{where}/{k}") if isinstance(v, h5py.Group) else v[()]
             return out
-        return walk(self._f[name])
+        g = get_object(self._f, self.path, name, h5py.Group)
+        if g is None:
+            raise FormatError(f"{self.path}: no /{name} group")
+        return walk(g, name)
+
+    def active(self) -> ActivePings | None:
+        """The ``/active`` ping schedule and replicas (DESIGN section 4), or None without it.
+
+        ``/active/pings/waveform`` may index the sorted waveform names or hold the names.
+        """
+        if "active" not in self._f:
+            return None
+        g, p = self._f["active"], self.path
+        try:
+            names = sorted(g["waveforms"].keys())
+            t = np.asarray(g["pings/time"][()], float).reshape(-1)
+            wv = np.asarray(g["pings/waveform"][()]).reshape(-1)
+        except KeyError as e:
+            raise FormatError(f"{p}: /active needs waveforms/, pings/time and pings/waveform "
+                              f"({e})") from None
+        if wv.shape != t.shape or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise FormatError(f"{p}: /active/pings/time must increase and match "
+                              "/active/pings/waveform")
+        if wv.dtype.kind in "iu":
+            if wv.size and (wv.min() < 0 or wv.max() >= len(names)):
+                raise FormatError(f"{p}: /active/pings/waveform indexes a missing waveform")
+            which = [names[int(i)] for i in wv]
+        else:
+            which = [_attr_str(v) for v in wv]
+            bad = [n for n in which if n not in names]
+            if bad:
+                raise FormatError(f"{p}: /active/pings/waveform names {bad[0]!r}, not in "
+                                  "/active/waveforms")
+        reps = {}
+        for n in names:
+            d = g["waveforms"][n]
+            a = d.attrs
+            try:
+                reps[n] = Replica(np.asarray(d[()], float).reshape(-1), self.fs,
+                                  _attr_str(a["kind"]), float(a["fc"]), float(a["bandwidth"]),
+                                  float(a["duration"]), int(a.get("bits", 0)))
+            except KeyError as e:
+                raise FormatError(f"{p}: /active/waveforms/{n} lacks attribute {e}") from None
+        proj = np.asarray(g.attrs.get("projector", np.zeros(3)), float).reshape(-1)
+        if proj.shape != (3,):
+            raise FormatError(f"{p}: /active attribute projector must hold 3 numbers")
+        return ActivePings(t, which, reps, proj)
 
     # -- data ----------------------------------------------------------------------------
     def read(self, start: int = 0, stop: int | None = None,
@@ -248,52 +418,6 @@ class Recording:
                      body_to_world(self.positions, pos[i], float(hd[i]), float(dp[i])))
                 for i in range(len(t))]
 
-    def n_blocks(self, nfft: int, hop: int, start: int = 0, stop: int | None = None) -> int:
-        """How many blocks :meth:`blocks` yields for these parameters."""
-        stop = self.n_samples if stop is None else min(int(stop), self.n_samples)
-        n = stop - start
-        if n <= 0:
-            return 0
-        return 1 + max(0, -(-(n - nfft) // hop))
-
-    def blocks(self, nfft: int, hop: int | None = None, start: int = 0, stop: int | None = None,
-               dtype: np.dtype | type = np.float32, first_index: int = 0) -> Iterator[Block]:
-        """Time-domain blocks of ``nfft`` samples every ``hop`` samples over [start, stop).
-
-        Block k covers samples [start + k·hop, start + k·hop + nfft). The last block is the
-        first one that reaches ``stop``; samples past ``stop`` are zeros and the block's
-        ``meta["n_valid"]`` says how many are real. So the hop-long heads of all blocks but the
-        last, followed by the last block's valid samples, tile [start, stop) exactly. Each
-        block carries the pose at its centre time.
-        """
-        hop = nfft if hop is None else int(hop)
-        nfft = int(nfft)
-        if nfft < 1 or hop < 1:
-            raise FormatError(f"block size and hop must be >= 1 (got {nfft}, {hop})")
-        stop = self.n_samples if stop is None else min(int(stop), self.n_samples)
-        nb = self.n_blocks(nfft, hop, start, stop)
-        itemsize = np.dtype(dtype).itemsize * max(1, self.n_channels_file)
-        per_slab = max(1, (SLAB_BYTES // itemsize - nfft) // hop + 1)  # blocks per slab
-        k = 0
-        while k < nb:
-            kk = min(nb, k + per_slab)
-            a = start + k * hop
-            b = min(stop, start + (kk - 1) * hop + nfft)
-            slab = self.read(a, b, dtype)
-            poses = self.poses((start + np.arange(k, kk) * hop + 0.5 * nfft) / self.fs)
-            for j in range(k, kk):
-                s = start + j * hop
-                seg = slab[s - a: s - a + nfft]
-                n_valid = seg.shape[0]
-                if n_valid < nfft:
-                    seg = np.concatenate(
-                        [seg, np.zeros((nfft - n_valid, self.n_channels), dtype=dtype)])
-                t0 = s / self.fs
-                yield Block(seg, Domain.TIME, t0, nfft / self.fs, self.fs,
-                            self.positions, poses[j - k],
-                            index=first_index + j, meta=TimeMeta(s, n_valid))
-            k = kk
-
     # -- lifetime ------------------------------------------------------------------------
     def close(self) -> None:
         self._f.close()
@@ -318,7 +442,20 @@ class RecordingWriter(AtomicH5Writer):
                  start_time: str | None = None, dtype: np.dtype | type = np.float32,
                  units: str = "Pa", chunk_samples: int | None = None,
                  attrs: dict[str, Any] | None = None) -> None:
-        super().__init__(path)
+        super().__init__(path, fs, n_channels, positions, sound_speed, start_time, dtype,
+                         units, chunk_samples, attrs)
+
+    def _start(self, fs: float, n_channels: int, positions: np.ndarray | None,
+               sound_speed: float, start_time: str | None, dtype: np.dtype | type, units: str,
+               chunk_samples: int | None, attrs: dict[str, Any] | None) -> None:
+        if not (np.isfinite(fs) and fs > 0):
+            raise FormatError(f"{self.path}: sample rate must be a finite number > 0 Hz, "
+                              f"got {fs}")
+        if not (np.isfinite(sound_speed) and sound_speed > 0):
+            raise FormatError(f"{self.path}: sound speed must be a finite number > 0 m/s, "
+                              f"got {sound_speed}")
+        if positions is not None and not np.all(np.isfinite(np.asarray(positions, float))):
+            raise FormatError(f"{self.path}: array positions contain NaN or Inf")
         self._f.attrs["format"] = FORMAT
         self._f.attrs["format_version"] = FORMAT_VERSION
         self._f.attrs["sound_speed"] = float(sound_speed)
@@ -339,6 +476,7 @@ class RecordingWriter(AtomicH5Writer):
 
     def append(self, data: np.ndarray) -> None:
         """Append samples (n, n_channels)."""
+        check_stop()
         n = data.shape[0]
         self._td.resize(self.n_samples + n, axis=0)
         self._td[self.n_samples:self.n_samples + n] = data
@@ -361,9 +499,33 @@ class RecordingWriter(AtomicH5Writer):
         if dead is not None:
             self._f.create_dataset("array/dead", data=np.asarray(dead, bool))
 
+    def set_active(self, time: np.ndarray, waveform: np.ndarray,
+                   waveforms: dict[str, tuple[np.ndarray, dict[str, Any]]],
+                   projector: np.ndarray) -> None:
+        """Write ``/active`` (DESIGN section 4): ping times (s), each ping's index into the
+        sorted waveform names, the replicas ``{name: (samples at fs, attrs)}`` with attrs
+        ``kind``, ``fc``, ``bandwidth``, ``duration`` (and ``bits``), the projector (m)."""
+        g = self._f.require_group("active")
+        g.attrs["projector"] = np.asarray(projector, float).reshape(3)
+        for name, (x, attrs) in waveforms.items():
+            d = g.create_dataset(f"waveforms/{name}", data=np.asarray(x, float))
+            for k, v in attrs.items():
+                d.attrs[k] = v
+        g.create_dataset("pings/time", data=np.asarray(time, float))
+        g.create_dataset("pings/waveform", data=np.asarray(waveform, np.int64))
+
     def write_group(self, name: str, datasets: dict[str, Any],
                     attrs: dict[str, Any] | None = None) -> None:
         """Write a group of datasets (nested dicts make subgroups), e.g. ``truth/sources/a``."""
+        check_stop()
+        for part in name.split("/"):
+            if part in ("", ".", ".."):
+                raise FormatError(f"{self.path}: group name {name!r} has an empty, '.' or '..' "
+                                  "part")
+        for k in datasets:
+            if not isinstance(k, str) or not k or "/" in k or k in (".", ".."):
+                raise FormatError(f"{self.path}: {name}: dataset name {k!r} is not a plain "
+                                  "name (no '/', not empty, '.' or '..')")
         g = self._f.require_group(name)
         for k, v in (attrs or {}).items():
             g.attrs[k] = v

@@ -1,0 +1,120 @@
+"""``arrayproc info``: a description of a recording or products file that is cheap on any file.
+
+Only attributes, dataset shapes and the small metadata datasets (positions, gains, nav) are
+read, never the samples or product columns; the aperture costs O(n) memory for n elements
+(:func:`arrayproc.io.geometry.aperture`). A file in acoular's layout without geometry is
+described (layout, channels, rate, duration) with a note on how to give the geometry.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import h5py
+
+from arrayproc.io.recording import _attr_str, get_object, open_h5
+
+#: Geometry summaries (line / planar / volumetric, aperture) up to this many elements.
+MAX_GEOMETRY_ELEMENTS = 100_000
+
+
+def describe(path: str, positions: Any = None) -> list[str]:
+    """Lines describing a recording or products file.
+
+    Parameters
+    ----------
+    path : str
+        HDF5 file.
+    positions : (n, 3) array, optional
+        Geometry given by the user (overrides the file's).
+
+    Returns
+    -------
+    list of str
+        The description, one line each.
+    """
+    from arrayproc.io.products import FORMAT as PRODUCTS
+    with open_h5(path) as f:
+        fmt = _attr_str(f.attrs.get("format", ""))
+    if fmt == PRODUCTS:
+        return _describe_products(path)
+    return _describe_recording(path, positions)
+
+
+def _describe_products(path: str) -> list[str]:
+    with open_h5(path, "products file") as f:
+        a = f.attrs
+        lines = [f"{path}: arrayproc products, format version "
+                 f"{_attr_str(a.get('format_version', '?'))}, complete="
+                 f"{_attr_str(a.get('complete', False))}",
+                 f"  source: {_attr_str(a.get('source', ''))}"]
+        for name in f:
+            g = get_object(f, Path(path), name)
+            if not isinstance(g, h5py.Group):
+                continue
+            cols = []
+            rows = 0
+            for k in g:
+                d = get_object(f, Path(path), f"{name}/{k}")
+                if isinstance(d, h5py.Dataset):
+                    cols.append(k)
+                    if d.ndim:
+                        rows = max(rows, int(d.shape[0]))
+            lines.append(f"  {name}: kind={_attr_str(g.attrs.get('kind', ''))} rows={rows} "
+                         f"datasets={', '.join(cols)}")
+    return lines
+
+
+def _describe_recording(path: str, positions: Any) -> list[str]:
+    from arrayproc.io.geometry import aperture, geometry_kind
+    from arrayproc.io.recording import Recording
+    with Recording(path, positions=positions, require_geometry=False) as r:
+        layout = (f"arrayproc recording, format version {r.format_version}"
+                  if r.layout == "arrayproc" else "acoular layout (no format attributes: "
+                  "defaults applied)")
+        lines = [f"{path}: {layout}",
+                 f"  channels: {r.n_channels} active of {r.n_channels_file}",
+                 f"  sample rate: {r.fs:g} Hz, samples: {r.n_samples}, duration: "
+                 f"{r.duration:.3f} s, units: {r.units}",
+                 f"  sound speed: {r.sound_speed:g} m/s, start: {r.start_time or 'unknown'}"]
+        if r.geometry_source == "none":
+            lines.append(f"  geometry: none in the file; give it with --line N SPACING or "
+                         f"--geometry FILE (CSV x,y,z or acoular XML, {r.n_channels_file} "
+                         "rows) to info and process")
+        elif r.n_channels > MAX_GEOMETRY_ELEMENTS:
+            lines.append(f"  geometry: {r.n_channels} elements ({r.geometry_source}); shape "
+                         "not summarised above "
+                         f"{MAX_GEOMETRY_ELEMENTS} elements")
+        else:
+            lines.append(f"  geometry: {geometry_kind(r.positions)} ({r.geometry_source}), "
+                         f"aperture {aperture(r.positions):.3f} m")
+        nav = r.nav
+        if nav.time.size > 1:
+            lo, hi = nav.position.min(0), nav.position.max(0)
+            lines.append(f"  nav: {nav.time.size} fixes over {nav.time[0]:.1f}-"
+                         f"{nav.time[-1]:.1f} s, x {lo[0]:.1f}..{hi[0]:.1f} m, y "
+                         f"{lo[1]:.1f}..{hi[1]:.1f} m")
+        else:
+            lines.append(f"  nav: static at ({nav.position[0, 0]:.1f}, "
+                         f"{nav.position[0, 1]:.1f}) m, heading {nav.heading[0]:.1f} deg")
+        truth = _truth_summary(r)
+        if truth:
+            lines.append(truth)
+    return lines
+
+
+def _truth_summary(r: Any) -> str:
+    """``truth: N source(s)[, pings]`` from the group names only (no data read)."""
+    f, p = r._f, r.path
+    t = get_object(f, p, "truth")
+    if t is None:
+        return ""
+    if not isinstance(t, h5py.Group):
+        return "  truth: /truth is not a group (ignored)"
+    src = t.get("sources")
+    n_src = len(src) if isinstance(src, h5py.Group) else 0
+    return f"  truth: {n_src} source(s)" + (", pings" if "pings" in t else "")
+
+
+__all__ = ["describe"]
