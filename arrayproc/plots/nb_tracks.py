@@ -175,7 +175,7 @@ def plot_nb_tracks(path: str, out_png: str, truth: bool = True) -> None:
     for name, g in tracks.items():
         is_cbf = bool(np.all(np.asarray(g["filter"]) < 0))
         f = np.asarray(g["freq_hz"], float)
-        if nav is not None and not is_cbf:
+        if nav is not None:
             speed, c = nav
             sp = np.interp(g["time"], first["time"], speed)
             f = f * (1.0 + sp * np.cos(np.radians(g["cone_deg"])) / c)

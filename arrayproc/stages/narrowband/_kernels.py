@@ -25,14 +25,17 @@ TWO_PI = 2.0 * math.pi
 @njit(cache=True, nogil=True)
 def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float, speed: float,
              x: np.ndarray, c: float, fc: float, rinv: np.ndarray, q: np.ndarray,
-             state: np.ndarray, cov: np.ndarray, out: np.ndarray) -> None:
+             state: np.ndarray, cov: np.ndarray, out: np.ndarray,
+             uniform: bool = False) -> None:
     """Run the EKF over ``T`` samples, updating ``state`` (θ rad, f Hz) and ``cov`` (2, 2) in
     place and writing ``out[k] = (θ, f, P_θθ, P_ff)`` after each sample's update.
 
     ``yr``/``yi``: (T, N) real and imaginary parts (``yi`` unused when ``cplx`` is False);
     sample k is at ``τ = tau0 + k dt`` s since the filter's (re)initialisation; ``rinv`` (N,)
     inverse noise variance of each real measurement component; ``q`` (2,) process noise
-    variance per second of θ (rad²/s) and f (Hz²/s).
+    variance per second of θ (rad²/s) and f (Hz²/s). ``uniform``: the elements are equally
+    spaced in ``x`` order, so the element phasors follow from the first by a constant rotation
+    (one complex product per element instead of a sine and a cosine).
     """
     n_t, n = yr.shape
     th, f = state[0], state[1]
@@ -52,21 +55,36 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
         j11 = 0.0
         b0 = 0.0
         b1 = 0.0
+        zr = zi = rr = ri = 0.0
+        if uniform:
+            ps0 = wf * (tau + x[0] * ct / c)
+            if cplx:
+                ps0 -= TWO_PI * fc * tau
+            zr = math.cos(ps0)
+            zi = math.sin(ps0)
+            dph = wf * (x[1] - x[0]) * ct / c if n > 1 else 0.0
+            rr = math.cos(dph)
+            ri = math.sin(dph)
         for m in range(n):
             s = tau + x[m] * ct / c
-            ph = wf * s
             gth = gt0 * (speed * s + a * x[m])
             gf = TWO_PI * a * s
-            if cplx:
-                ps = ph - TWO_PI * fc * tau
+            if uniform:
+                cs = zr
+                sn = zi
+                zr, zi = zr * rr - zi * ri, zr * ri + zi * rr
+            elif cplx:
+                ps = wf * s - TWO_PI * fc * tau
                 cs = math.cos(ps)
                 sn = math.sin(ps)
+            else:
+                cs = math.cos(wf * s)
+                sn = math.sin(wf * s)
+            if cplx:
                 # residual along the model's tangent: Im(y e^{-jΨ}); |∂h|² = |∇Φ|²
                 e = (yi[k, m] * cs - yr[k, m] * sn) * rinv[m]
                 w = rinv[m]
             else:
-                cs = math.cos(ph)
-                sn = math.sin(ph)
                 e = cs * (yr[k, m] - sn) * rinv[m]
                 w = cs * cs * rinv[m]
             j00 += w * gth * gth

@@ -69,6 +69,8 @@ class NarrowbandEKF:
                  q: tuple[float, float] = (0.05, 0.01), noise: float | None = None,
                  reinit_s: float = 30.0, dual: bool = True, amp_tau_s: float = 5.0) -> None:
         self.x = np.ascontiguousarray(x, float)
+        d = np.diff(self.x)
+        self.uniform = bool(d.size == 0 or np.allclose(d, d[0], rtol=1e-9, atol=1e-12))
         self.c = float(sound_speed)
         self.fc = fc
         self.p0 = np.diag([math.radians(p0[0]) ** 2, float(p0[1]) ** 2])
@@ -161,7 +163,7 @@ class NarrowbandEKF:
             for f, o in zip(self._filters, outs):
                 _kernels.ekf_span(yr[k:k1], yi[k:k1] if cplx else yi, cplx, t_k - f.origin,
                                   dt, speed, self.x, self.c, fc, rinv, self.q, f.state, f.cov,
-                                  o[k:k1])
+                                  o[k:k1], self.uniform)
             i = self._active()
             res[k:k1] = outs[i][k:k1]
             which[k:k1] = i

@@ -22,12 +22,16 @@ from typing import Any
 import numpy as np
 
 from arrayproc.chain import Block, Param, Stage, positive, register
+from arrayproc.chain.domains import Domain
 from arrayproc.errors import ConfigError
+from arrayproc.stages.narrowband.cbf_baseline import cbf_track
 from arrayproc.stages.narrowband.ekf import NarrowbandEKF
 from arrayproc.stages.narrowband.initial import cone_scan, strongest_line
 
 #: Seconds of input used for the automatic start values.
 AUTO_SPAN_S = 4.0
+#: Window of the CBF baseline's coarse scan and line frequency, s.
+BASELINE_WINDOW_S = 4.0
 #: Largest spread (m) of the element y and z coordinates still taken as a line array.
 LINE_TOL_M = 1e-3
 
@@ -49,6 +53,7 @@ class NarrowbandEKFStage(Stage):
     """Narrowband EKF tracker (thesis 3.2.1); see the module docstring."""
 
     kind = "nb_ekf"
+    accepts = frozenset({Domain.TIME})
     params = {
         "freq": Param("any", "auto", "initial tonal frequency, Hz, or \"auto\"",
                       check=_auto_or("Hz", 0.0, None)),
@@ -70,10 +75,15 @@ class NarrowbandEKFStage(Stage):
         "dual": Param("bool", True, "two filters re-initialised half a period apart"),
         "output_rate": Param("float", 10.0, "rows per second written to nb_tracks, Hz",
                              check=positive),
+        "baseline": Param("bool", False, "also write the per-sample CBF baseline (thesis "
+                          "3.2.1.1) as nb_tracks group '<name>_cbf' (filter = -1)"),
     }
 
     def validate(self) -> None:
         self._ekf: NarrowbandEKF | None = None
+        self._last_slot = -1.0
+        self._cbf_last_slot = -1.0
+        self._cbf_buf: list[tuple[np.ndarray, Block]] = []
 
     def _x(self, b: Block) -> np.ndarray:
         p = np.asarray(b.positions, float)
@@ -86,8 +96,8 @@ class NarrowbandEKFStage(Stage):
 
     def _start(self, y: np.ndarray, b: Block, x: np.ndarray, speed: float) -> None:
         c = self.ctx.sound_speed
-        fc = float(b.meta.get("fc", 0.0)) if np.iscomplexobj(y) else None
-        band = b.meta.get("band")
+        fc = float(b.meta.fc) if np.iscomplexobj(y) else None
+        band = b.meta.band
         f_line = (strongest_line(y, b.fs, tuple(band) if band else None, fc or 0.0)
                   if self.freq == "auto" or self.cone == "auto" else None)
         if self.cone == "auto":
@@ -106,55 +116,93 @@ class NarrowbandEKFStage(Stage):
             noise=None if self.noise == "auto" else float(self.noise),
             reinit_s=self.reinit_s, dual=self.dual)
 
-    def _track(self, y: np.ndarray, b: Block, x: np.ndarray, speed: float, out) -> None:
-        s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
+    def _track(self, y: np.ndarray, b: Block, x: np.ndarray, speed: float, out,
+               cbf_out=None) -> None:
+        if self.baseline:
+            self._baseline(y, b, cbf_out)
+        s0 = int(b.meta.sample0)
         r = self._ekf.process(y, s0 / b.fs, b.fs, speed)
-        step = max(1, int(round(b.fs / self.output_rate)))
-        keep = (s0 + np.arange(y.shape[0])) % step == 0
+        # one row at the first sample at or after each multiple of 1 / output_rate
+        slot = np.floor((s0 + np.arange(y.shape[0])) * (self.output_rate / b.fs) + 1e-9)
+        prev = np.concatenate([[self._last_slot], slot[:-1]])
+        keep = slot != prev
+        self._last_slot = slot[-1] if slot.size else self._last_slot
         if out is not None and keep.any():
             out.append(time=r["time"][keep], cone_deg=r["cone_deg"][keep],
                        freq_hz=r["freq_hz"][keep], sigma_cone_deg=r["sigma_cone_deg"][keep],
                        sigma_freq_hz=r["sigma_freq_hz"][keep],
                        filter=r["filter"][keep].astype(np.int8))
 
+    def _baseline(self, y: np.ndarray | None, b: Block | None, out, flush: bool = False) -> None:
+        """Buffer samples and run the CBF baseline on windows of BASELINE_WINDOW_S."""
+        if y is not None:
+            self._cbf_buf.append((y, b))
+        if not self._cbf_buf:
+            return
+        b0 = self._cbf_buf[0][1]
+        n = sum(v.shape[0] for v, _ in self._cbf_buf)
+        if n < BASELINE_WINDOW_S * b0.fs and not flush:
+            return
+        yy = np.concatenate([v for v, _ in self._cbf_buf])
+        last = self._cbf_buf[-1][1]
+        self._cbf_buf = []
+        c = self.ctx.sound_speed
+        fc = float(last.meta.fc) if np.iscomplexobj(yy) else 0.0
+        band = last.meta.band
+        r = cbf_track(yy, b0.fs, self._x(last), c, fc=fc, band=tuple(band) if band else None,
+                      coarse_s=BASELINE_WINDOW_S)
+        s0 = int(b0.meta.sample0)
+        slot = np.floor((s0 + np.arange(yy.shape[0])) * (self.output_rate / b0.fs) + 1e-9)
+        keep = slot != np.concatenate([[self._cbf_last_slot], slot[:-1]])
+        self._cbf_last_slot = slot[-1]
+        speed = float(last.pose.speed) if last.pose is not None else 0.0
+        f = r["freq_hz"] / (1.0 + speed * np.cos(np.radians(r["cone_deg"])) / c)
+        k = int(keep.sum())
+        if out is not None and k:
+            out.append(time=(s0 + np.flatnonzero(keep)) / b0.fs, cone_deg=r["cone_deg"][keep],
+                       freq_hz=f[keep], sigma_cone_deg=np.full(k, np.nan),
+                       sigma_freq_hz=np.full(k, np.nan), filter=np.full(k, -1, np.int8))
+
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = self.products("nb_tracks", reinit_s=self.reinit_s, dual=int(self.dual))
+        cbf_out = (self.ctx.products.group(f"{self.name}_cbf", "nb_tracks", self.name,
+                                           estimator="cbf")
+                   if self.baseline and self.ctx.products is not None else None)
         pending: list[Block] = []
         for b in blocks:
-            if b.domain != ("time", "channel"):
-                raise ConfigError(f"stage {self.name!r}: needs time-domain input (a "
-                                  f"dft_filter output), got {b.domain}")
             if self._ekf is None:
                 pending.append(b)
-                span = sum(p.meta.get("n_valid", p.data.shape[0]) for p in pending) / b.fs
+                span = sum(p.meta.n_valid for p in pending) / b.fs
                 if span < AUTO_SPAN_S and (self.freq == "auto" or self.cone == "auto"):
                     continue
-                y0 = np.concatenate([p.data[:p.meta.get("n_valid", p.data.shape[0])]
+                y0 = np.concatenate([p.data[:p.meta.n_valid]
                                      for p in pending])
                 x = self._x(b)
                 speed = float(b.pose.speed) if b.pose is not None else 0.0
                 self._start(y0, b, x, speed)
                 for p in pending:
-                    n = p.meta.get("n_valid", p.data.shape[0])
-                    self._track(p.data[:n], p, x, speed, out)
+                    n = p.meta.n_valid
+                    self._track(p.data[:n], p, x, speed, out, cbf_out)
                     yield p
                 pending = []
                 continue
-            n = b.meta.get("n_valid", b.data.shape[0])
+            n = b.meta.n_valid
             speed = float(b.pose.speed) if b.pose is not None else 0.0
-            self._track(b.data[:n], b, self._x(b), speed, out)
+            self._track(b.data[:n], b, self._x(b), speed, out, cbf_out)
             yield b
         if pending:  # a stream shorter than AUTO_SPAN_S
-            y0 = np.concatenate([p.data[:p.meta.get("n_valid", p.data.shape[0])]
+            y0 = np.concatenate([p.data[:p.meta.n_valid]
                                  for p in pending])
             b = pending[-1]
             x = self._x(b)
             speed = float(b.pose.speed) if b.pose is not None else 0.0
             self._start(y0, b, x, speed)
             for p in pending:
-                n = p.meta.get("n_valid", p.data.shape[0])
-                self._track(p.data[:n], p, x, speed, out)
+                n = p.meta.n_valid
+                self._track(p.data[:n], p, x, speed, out, cbf_out)
                 yield p
+        if self.baseline:
+            self._baseline(None, None, cbf_out, flush=True)
 
     def warmup_seconds(self, fs: float) -> float:
         # A recursive filter never forgets completely; one re-initialisation period is the

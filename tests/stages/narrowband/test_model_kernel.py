@@ -45,21 +45,25 @@ def test_frequency_derivative_grows_with_time():
     assert np.allclose(g2 / g1, (100.0 + X * math.cos(1.0) / C) / (1.0 + X * math.cos(1.0) / C))
 
 
+@pytest.mark.parametrize("uniform", [True, False])
 @pytest.mark.parametrize("cplx", [False, True])
-def test_kernel_matches_numpy_reference(cplx):
+def test_kernel_matches_numpy_reference(cplx, uniform):
+    """Same rows as the gain-form numpy EKF, for uniform spacing (phasor recursion in the
+    kernel) and irregular spacing (a sine and cosine per element), with unequal noise."""
     fs = 80.0 if cplx else 1706.0
     fc = 697.5 if cplx else None
+    x = X if uniform else X + np.random.default_rng(8).uniform(-0.05, 0.05, X.size)
     t = np.arange(300) / fs + 3.0
-    y = tonal(t, X, 63.0, 697.0, 2.5, 0.0, seed=3, fc=fc)
-    r = np.full(X.size, 0.5)
+    y = tonal(t, x, 63.0, 697.0, 2.5, 0.0, seed=3, fc=fc)
+    r = np.linspace(0.4, 0.6, X.size)
     q = np.array([math.radians(0.05) ** 2, 0.01 ** 2])
     x0 = np.array([math.radians(64.0), 697.1])
     p0 = np.diag([math.radians(2.0) ** 2, 0.5 ** 2])
-    ref = ekf_reference(y, 0.2, 1 / fs, 2.5, X, C, fc, r, q, x0, p0)
+    ref = ekf_reference(y, 0.2, 1 / fs, 2.5, x, C, fc, r, q, x0, p0)
     state, cov, out = x0.copy(), p0.copy(), np.empty((t.size, 4))
     yi = np.ascontiguousarray(y.imag) if cplx else np.zeros((1, 1))
-    _kernels.ekf_span(np.ascontiguousarray(y.real), yi, cplx, 0.2, 1 / fs, 2.5, X, C,
-                      fc or 0.0, 1 / r, q, state, cov, out)
+    _kernels.ekf_span(np.ascontiguousarray(y.real), yi, cplx, 0.2, 1 / fs, 2.5, x, C,
+                      fc or 0.0, 1 / r, q, state, cov, out, uniform)
     np.testing.assert_allclose(out[:, :2], ref[:, :2], rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(out[:, 2:], ref[:, 2:], rtol=1e-6)
     np.testing.assert_allclose(state, ref[-1, :2], rtol=1e-9)
