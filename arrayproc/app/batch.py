@@ -1,0 +1,528 @@
+"""``arrayproc batch``: a chain over many recordings, or over segments of one long recording, as
+tasks on ``dask.distributed`` (DESIGN section 7; docs/scale-out.md).
+
+    arrayproc batch INPUTS... -c CHAIN.toml -o OUTDIR [--workers N | --scheduler ADDRESS]
+                    [--segment-s S] [--resume]
+
+One task per recording writes ``OUTDIR/<input stem>.h5``, the file ``arrayproc process`` writes
+(every dataset and attribute equal). With ``--segment-s`` each recording is cut into segments
+(:func:`arrayproc.chain.segments.plan_segments`: warm-up margins, reads aligned on the stages'
+frame grids), one task per segment writes a part file and a last task merges the parts into
+``OUTDIR/<stem>.h5`` (:func:`arrayproc.chain.segments.merge_products`).
+
+Without ``--scheduler`` a :class:`distributed.LocalCluster` of ``--workers`` processes (default:
+the cores) runs here, each worker one task at a time with ``cores // workers`` threads for
+BLAS, numba and the stages' own workers (a stage's ``threads = 0``, "all cores", becomes that
+share), so workers do not oversubscribe the cores. With ``--scheduler`` the tasks go to that
+cluster (dask-jobqueue, Kubernetes, SSH), whose workers must see the same paths.
+
+Outputs are written under a temporary name and renamed when complete (``complete = True``),
+so a task run twice, or retried after its worker died (``retries``; Dask moves the task of a
+lost worker to another), gives the same file. ``--resume`` skips inputs (and segment parts)
+whose output is complete. An input that cannot be read fails alone: the others complete, a
+summary line names the failed inputs and the exit status is 1.
+
+Seeds: a stage with a ``seed`` parameter left at its default gets the task's seed, from
+``numpy.random.SeedSequence(root).spawn`` keyed by the input's place in the sorted input list
+and the segment's index; no stage of the package draws random numbers today.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import math
+import os
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from arrayproc.errors import ArrayprocError, ConfigError, FormatError
+
+INSTALL_HINT = ("arrayproc batch needs dask.distributed, which is not installed: install the "
+                "extra with  pip install 'arrayproc[dask]'  (or  make install)")
+LIST_SUFFIXES = (".txt", ".lst", ".list")
+#: Environment variables that size the thread pools of numerical libraries in a worker.
+THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+               "NUMBA_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+
+def require_dask() -> Any:
+    """Import ``distributed``, or raise ConfigError saying how to install it."""
+    try:
+        import distributed
+    except ImportError:
+        raise ConfigError(INSTALL_HINT) from None
+    return distributed
+
+
+# -- inputs, outputs, seeds ---------------------------------------------------------------------
+def expand_inputs(items: Sequence[str]) -> list[Path]:
+    """Recordings named by paths, glob patterns and text files of paths (``.txt``, ``.lst``,
+    ``.list``: one path or pattern a line, ``#`` comments, relative to the list's folder).
+
+    Parameters
+    ----------
+    items : sequence of str
+        Command-line inputs.
+
+    Returns
+    -------
+    list of Path
+        Distinct recordings, sorted.
+
+    Raises
+    ------
+    ConfigError
+        A pattern that matches nothing, a missing list file, or two inputs with the same stem
+        (their outputs would collide).
+    """
+    found: set[Path] = set()
+
+    def add(item: str, base: Path) -> None:
+        pattern = item if os.path.isabs(item) else str(base / item)
+        if glob.has_magic(pattern):
+            hits = sorted(glob.glob(pattern))
+            if not hits:
+                raise ConfigError(f"input {item!r}: no file matches")
+            found.update(Path(h).resolve() for h in hits)
+        else:
+            found.add(Path(pattern).resolve())
+
+    for item in items:
+        if item.lower().endswith(LIST_SUFFIXES):
+            lst = Path(item)
+            if not lst.is_file():
+                raise ConfigError(f"input list {item}: no such file")
+            for line in lst.read_text().splitlines():
+                line = line.split("#", 1)[0].strip()
+                if line:
+                    add(line, lst.parent)
+        else:
+            add(item, Path("."))
+    if not found:
+        raise ConfigError("no input recordings given")
+    paths = sorted(found)
+    stems: dict[str, Path] = {}
+    for p in paths:
+        if p.stem in stems:
+            raise ConfigError(f"inputs {stems[p.stem]} and {p} have the same stem: both would "
+                              f"write {p.stem}.h5")
+        stems[p.stem] = p
+    return paths
+
+
+def output_for(outdir: str | os.PathLike, recording: str | os.PathLike) -> Path:
+    """``OUTDIR/<recording stem>.h5``."""
+    return Path(outdir) / f"{Path(recording).stem}.h5"
+
+
+def is_complete(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a products file marked complete (False when absent or unreadable)."""
+    import h5py
+    try:
+        with h5py.File(path, "r") as f:
+            return bool(f.attrs.get("complete", False))
+    except (OSError, ValueError):
+        return False
+
+
+def task_seeds(root: int, n_inputs: int, n_segments: Sequence[int]) -> list[list[int]]:
+    """Per-task seeds: ``SeedSequence(root).spawn(n_inputs)[i].spawn(n_segments[i])[j]``,
+    each as one 64-bit integer.
+
+    Parameters
+    ----------
+    root : int
+        The batch's root seed.
+    n_inputs : int
+        Inputs, in sorted order.
+    n_segments : sequence of int
+        Segments of each input (1 when not segmented).
+
+    Returns
+    -------
+    list of list of int
+        ``seeds[i][j]`` for input i, segment j.
+    """
+    children = np.random.SeedSequence(root).spawn(n_inputs)
+    return [[int(s.generate_state(1, np.uint64)[0]) for s in c.spawn(n)]
+            for c, n in zip(children, n_segments)]
+
+
+def worker_threads(n_workers: int, cores: int | None = None) -> int:
+    """Threads each of ``n_workers`` workers may use without oversubscribing the cores."""
+    cores = cores or os.cpu_count() or 1
+    return max(1, cores // max(1, n_workers))
+
+
+# -- tasks (run on the workers) -----------------------------------------------------------------
+def _prepare_stages(spec: Any, threads: int, seed: int) -> None:
+    """Stages' ``threads = 0`` (all cores) becomes the worker's share; a ``seed`` left at its
+    default becomes the task's seed."""
+    for st in spec.stages:
+        if "threads" in st.params and getattr(st, "threads", None) == 0:
+            st.threads = threads
+        if "seed" in st.params and getattr(st, "seed", None) == st.params["seed"].default:
+            st.seed = seed
+
+
+def _limit_threads(threads: int) -> None:
+    try:
+        import numba
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    except (ImportError, ValueError):
+        pass
+
+
+def process_task(recording: str, chain_text: str, output: str, threads: int, seed: int,
+                 window: tuple[float, float] | None = None,
+                 read: tuple[float | None, float | None] = (None, None)) -> dict[str, Any]:
+    """Run the chain over one recording (or one segment of it) into ``output``, atomically.
+
+    Parameters
+    ----------
+    recording : str
+        Recording path (as the workers see it).
+    chain_text : str
+        The chain's TOML text.
+    output : str
+        Products file to write.
+    threads : int
+        Threads the task may use.
+    seed : int
+        The task's seed (for stages that draw random numbers).
+    window : (float, float), optional
+        Keep only rows with ``window[0] <= time < window[1]`` s (a segment).
+    read : (float or None, float or None)
+        ``t_start`` and ``t_stop`` handed to :func:`arrayproc.app.api.run_chain`, s.
+
+    Returns
+    -------
+    dict
+        ``status`` ("done" or "failed"), ``error`` (one line), ``seconds``, ``blocks``.
+    """
+    from arrayproc.app.api import build_chain, run_chain
+    from arrayproc.io.products import ProductsWriter
+    from arrayproc.io.recording import Recording
+    t0 = time.perf_counter()
+    _limit_threads(threads)
+    warnings: list[str] = []
+    try:
+        spec = build_chain(chain_text)
+        _prepare_stages(spec, threads, seed)
+        with Recording(recording) as r:
+            with ProductsWriter(output, source=str(Path(recording).resolve()),
+                                chain=spec.text, time_window=window) as out:
+                n = run_chain(r, spec, out, read[0], read[1], log=warnings.append)
+    except ArrayprocError as e:  # a bad input or chain fails alone, without retries
+        return {"status": "failed", "error": str(e), "seconds": time.perf_counter() - t0}
+    return {"status": "done", "error": "", "seconds": time.perf_counter() - t0, "blocks": n,
+            "warnings": warnings}
+
+
+def merge_task(parts: Sequence[str], results: Sequence[dict[str, Any]], output: str,
+               recording: str, chain_text: str) -> dict[str, Any]:
+    """Merge the segment parts of one recording into ``output`` and remove the parts.
+
+    Parameters
+    ----------
+    parts : sequence of str
+        Part files, in time order.
+    results : sequence of dict
+        The parts' task results (a failed part fails the merge with its error).
+    output : str
+        Merged products file.
+    recording : str
+        The recording (its resolved path goes in the ``source`` attribute).
+    chain_text : str
+        The chain's TOML text.
+
+    Returns
+    -------
+    dict
+        As :func:`process_task`.
+    """
+    from arrayproc.chain.segments import merge_products
+    t0 = time.perf_counter()
+    bad = [r for r in results if r["status"] != "done"]
+    if bad:
+        return {"status": "failed", "error": bad[0]["error"], "seconds": 0.0}
+    try:
+        merge_products(parts, output, str(Path(recording).resolve()), chain_text)
+    except ArrayprocError as e:
+        return {"status": "failed", "error": str(e), "seconds": time.perf_counter() - t0}
+    for p in parts:
+        Path(p).unlink(missing_ok=True)
+    return {"status": "done", "error": "", "seconds": time.perf_counter() - t0}
+
+
+# -- the batch ----------------------------------------------------------------------------------
+@dataclass
+class TaskResult:
+    """What became of one input."""
+
+    recording: Path
+    output: Path
+    status: str  # "done", "skipped" or "failed"
+    error: str = ""
+    seconds: float = 0.0
+    segments: int = 1
+    parts_run: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+
+def start_client(workers: int | None = None, scheduler: str | None = None,
+                 threads: int | None = None) -> tuple[Any, Any]:
+    """A client of the cluster at ``scheduler``, or of a new LocalCluster of ``workers``
+    worker processes (default: the cores), one task at a time each, with ``threads`` threads
+    (default ``cores // workers``) for BLAS, OpenMP and numba.
+
+    Returns
+    -------
+    (Client, LocalCluster or None)
+        Close both when done (the cluster is None for an existing scheduler).
+    """
+    distributed = require_dask()
+    if scheduler:
+        try:
+            return distributed.Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError) as e:
+            raise ConfigError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+    n = workers or os.cpu_count() or 1
+    if n < 1:
+        raise ConfigError(f"--workers must be >= 1, got {n}")
+    t = threads or worker_threads(n)
+    env = {v: str(t) for v in THREAD_VARS}
+    dashboard = ":0" if _has_bokeh() else None
+    cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                       env=env, dashboard_address=dashboard,
+                                       silence_logs=40)
+    return distributed.Client(cluster), cluster
+
+
+def _has_bokeh() -> bool:
+    try:
+        import bokeh  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _recording_shape(path: Path) -> tuple[float, int, int]:
+    from arrayproc.io.recording import Recording
+    with Recording(path) as r:
+        return r.fs, r.n_samples, r.n_channels
+
+
+def _segment_grid(spec: Any, fs: float) -> int:
+    """Read grid (recording samples) for stages known to batch frames from the read's start:
+    ``cbf`` runs one GEMM per bin over ``batch`` frames, and the rounding of a frame's beams
+    depends on its place in the batch, so reads start on ``batch · hop`` input samples."""
+    from arrayproc.chain.graph import set_rates
+    set_rates(spec, fs)
+    grid = 1
+    for st in spec.stages:
+        if st.kind == "cbf" and getattr(st, "segment_grid", None) is None:
+            ratio = fs / st.fs_in
+            if abs(ratio - round(ratio)) < 1e-9:
+                grid = math.lcm(grid, int(st.batch) * int(st.hop) * int(round(ratio)))
+    return grid
+
+
+def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
+              outdir: str | os.PathLike, client: Any, segment_s: float | None = None,
+              resume: bool = False, seed: int = 0, threads: int = 1, retries: int = 2,
+              progress: bool = False) -> list[TaskResult]:
+    """Run a chain over recordings as Dask tasks; see the module doc.
+
+    Parameters
+    ----------
+    inputs : sequence of path
+        Recordings (already expanded, see :func:`expand_inputs`).
+    chain : path
+        Chain TOML file (validated here, before any task is submitted).
+    outdir : path
+        Output folder (created when absent).
+    client : distributed.Client
+        Where the tasks run.
+    segment_s : float, optional
+        Cut each recording into segments of about this many seconds.
+    resume : bool
+        Skip inputs (and parts) whose output is complete.
+    seed : int
+        Root seed of the per-task seeds.
+    threads : int
+        Threads each task may use.
+    retries : int
+        Dask retries of a task that raised an unexpected error or lost its worker.
+    progress : bool
+        Show a bar over tasks on stderr.
+
+    Returns
+    -------
+    list of TaskResult
+        One per input, in input order.
+    """
+    distributed = require_dask()
+    from arrayproc.app.api import load_chain
+    from arrayproc.chain.segments import part_path, plan_segments
+    spec = load_chain(str(chain))
+    text = spec.text
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    recs = [Path(p).resolve() for p in inputs]
+    results = [TaskResult(r, output_for(out, r), "done") for r in recs]
+    plans: list[list[Any] | None] = [None] * len(recs)
+    if segment_s is not None:
+        for i, r in enumerate(recs):
+            if resume and is_complete(results[i].output):
+                continue
+            try:
+                fs, n, nch = _recording_shape(r)
+                plans[i] = plan_segments(spec, fs, n, nch, segment_s,
+                                         grid=_segment_grid(load_chain(str(chain)), fs))
+            except FormatError as e:
+                results[i].status, results[i].error = "failed", str(e)
+    seeds = task_seeds(seed, len(recs), [len(p) if p else 1 for p in plans])
+    futures: dict[Any, int] = {}
+    for i, res in enumerate(results):
+        if res.status == "failed":
+            continue
+        if resume and is_complete(res.output):
+            res.status = "skipped"
+            continue
+        _clean_partials(res.output)
+        plan = plans[i]
+        if plan is None:
+            f = client.submit(process_task, str(res.recording), text, str(res.output), threads,
+                              seeds[i][0], retries=retries, pure=False,
+                              key=f"process-{res.output.stem}-{os.getpid()}-{time.time_ns()}")
+            futures[f] = i
+            res.parts_run = 1
+            continue
+        res.segments = len(plan)
+        parts, part_results = [], []
+        for seg in plan:
+            pp = part_path(res.output, seg)
+            parts.append(str(pp))
+            if resume and is_complete(pp):
+                part_results.append({"status": "done", "error": "", "seconds": 0.0})
+                continue
+            _clean_partials(pp)
+            res.parts_run += 1
+            part_results.append(client.submit(
+                process_task, str(res.recording), text, str(pp), threads, seeds[i][seg.index],
+                seg.window, (seg.t_start, seg.t_read_stop), retries=retries, pure=False,
+                key=f"segment-{res.output.stem}-{seg.index}-{os.getpid()}-{time.time_ns()}"))
+        f = client.submit(merge_task, parts, part_results, str(res.output), str(res.recording),
+                          text, retries=retries, pure=False,
+                          key=f"merge-{res.output.stem}-{os.getpid()}-{time.time_ns()}")
+        futures[f] = i
+    bar = None
+    if progress and futures:
+        from tqdm import tqdm
+        bar = tqdm(total=len(futures), unit="task", desc="batch", file=sys.stderr)
+    try:
+        for f in distributed.as_completed(list(futures)):
+            res = results[futures[f]]
+            try:
+                r = f.result()
+                res.status, res.error = r["status"], r["error"]
+                res.seconds = r.get("seconds", 0.0)
+                res.warnings = r.get("warnings", [])
+            except Exception as e:  # noqa: BLE001 - retries exhausted or worker lost: report it
+                res.status = "failed"
+                res.error = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    for res in results:  # a retried task leaves the temporary file of its lost attempt
+        if res.status == "done":
+            _clean_partials(res.output)
+    return results
+
+
+def _clean_partials(target: Path) -> None:
+    """Remove temporary files an interrupted run left for ``target``."""
+    for p in target.parent.glob(f".{target.name}.*.part"):
+        p.unlink(missing_ok=True)
+
+
+def summary(results: Sequence[TaskResult]) -> str:
+    """One line: counts, and each failed input with its reason."""
+    done = sum(r.status == "done" for r in results)
+    skipped = sum(r.status == "skipped" for r in results)
+    failed = [r for r in results if r.status == "failed"]
+    line = f"{done} done, {skipped} skipped, {len(failed)} failed of {len(results)} inputs"
+    if failed:
+        line += ": " + "; ".join(f"{r.recording.name} ({r.error})" for r in failed)
+    return line
+
+
+# -- command line -------------------------------------------------------------------------------
+def cmd_batch(args: argparse.Namespace) -> int:
+    """``arrayproc batch``: exit 0 when every input is done or skipped, 1 when any failed."""
+    require_dask()
+    inputs = expand_inputs(args.inputs)
+    if args.segment_s is not None and not args.segment_s > 0:
+        raise ConfigError(f"--segment-s must be > 0 s, got {args.segment_s}")
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError(f"--workers must be >= 1, got {args.workers}")
+    from arrayproc.app.api import load_chain
+    load_chain(args.chain)  # a bad chain stops here, before a cluster starts
+    client, cluster = start_client(args.workers, args.scheduler)
+    try:
+        n_workers = len(client.scheduler_info().get("workers", {})) or 1
+        threads = (worker_threads(args.workers or os.cpu_count() or 1) if cluster is not None
+                   else 1)
+        link = client.dashboard_link if (cluster is None or _has_bokeh()) else None
+        where = f"scheduler {args.scheduler}" if cluster is None else \
+            f"local cluster of {n_workers} workers x {threads} threads"
+        print(f"arrayproc batch: {len(inputs)} inputs on {where}"
+              + (f"; dashboard {link}" if link else ""), file=sys.stderr)
+        results = run_batch(inputs, args.chain, args.output, client, args.segment_s,
+                            args.resume, args.seed, threads, args.retries,
+                            progress=not args.no_progress and sys.stderr.isatty())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    for r in results:
+        for w in r.warnings:
+            print(f"arrayproc: warning: {r.recording.name}: {w}", file=sys.stderr)
+    line = summary(results)
+    failed = any(r.status == "failed" for r in results)
+    print(f"arrayproc batch: {line}", file=sys.stderr if failed else sys.stdout)
+    return 1 if failed else 0
+
+
+def add_to(sub: Any) -> None:
+    """Register ``arrayproc batch`` on the CLI's subparsers."""
+    s = sub.add_parser("batch", help="run a chain over many recordings (or segments) on Dask")
+    s.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="recordings, glob patterns, or .txt/.lst files of paths")
+    s.add_argument("-c", "--chain", required=True, help="chain TOML file")
+    s.add_argument("-o", "--output", required=True, metavar="OUTDIR",
+                   help="folder for OUTDIR/<input stem>.h5")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: the cores)")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="an existing Dask scheduler, e.g. tcp://host:8786")
+    s.add_argument("--segment-s", type=float, default=None, metavar="S",
+                   help="cut each recording into segments of about S seconds")
+    s.add_argument("--resume", action="store_true", help="skip inputs whose output is complete")
+    s.add_argument("--seed", type=int, default=0, help="root of the per-task seeds (default 0)")
+    s.add_argument("--retries", type=int, default=2,
+                   help="retries of a task whose worker died or that failed unexpectedly")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.set_defaults(func=cmd_batch)
+
