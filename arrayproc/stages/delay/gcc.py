@@ -290,20 +290,29 @@ class GccEstimator:
             centre = (idx - L) / self.fs
             lo = np.maximum(centre - 1.0 / self.fs, -lim_s)
             hi = np.minimum(centre + 1.0 / self.fs, lim_s)
-            if K > 1:  # one Newton step each, then refine only the near-best candidates
-                tau, pred = predicted_peaks(Gm, rows, self.freqs[0], self.df, tau, lo, hi)
+            multi = np.flatnonzero(count[rows] > 1)
+            if multi.size:  # one Newton step each, then refine only the near-best candidates
+                t1, pred = predicted_peaks(Gm, rows[multi], self.freqs[0], self.df, tau[multi],
+                                           lo[multi], hi[multi])
+                tau[multi] = t1
                 top = np.full(m, -np.inf)
-                np.maximum.at(top, rows, pred)
-                sel = pred >= top[rows] - 0.02 * np.abs(top[rows])
+                np.maximum.at(top, rows[multi], pred)
+                r_m = rows[multi]
+                sel = np.ones(rows.size, bool)
+                sel[multi] = pred >= top[r_m] - 0.02 * np.abs(top[r_m])
                 rows, tau, lo, hi = rows[sel], tau[sel], lo[sel], hi[sel]
-            tau, peak, _ = refine_peaks(Gm, rows, self.freqs[0], self.df, tau, lo, hi,
-                                        self.n_iter)
+            tau, peak, peak2 = refine_peaks(Gm, rows, self.freqs[0], self.df, tau, lo, hi,
+                                            self.n_iter, 1e-7 / self.fs)
         # the highest refined candidate of each row (rows are in order in ``rows``)
         order = np.lexsort((-peak, rows))
         first = np.r_[0, np.flatnonzero(np.diff(rows[order])) + 1]
-        tau = tau[order[first]]
-        Gu = G.reshape(m, nb)
-        ru, ru2 = corr_at(Gu, self.freqs[0], self.df, np.ascontiguousarray(tau))
+        best = order[first]
+        tau = tau[best]
+        if self.interp == "fft" and self.weighting == "none":  # r, r'' already known there
+            ru, ru2 = peak[best], peak2[best]
+        else:
+            ru, ru2 = corr_at(G.reshape(m, nb), self.freqs[0], self.df,
+                              np.ascontiguousarray(tau))
         Xf = X.view(np.float32 if X.dtype == np.complex64 else np.float64)
         E = np.einsum("ijk,ijk->ij", Xf, Xf, dtype=np.float64)
         norm = np.sqrt(np.maximum(E * E[:, ref][:, None], 1e-300)).reshape(-1)

@@ -140,7 +140,7 @@ def test_refine_finds_the_continuous_maximum():
     G = np.exp(-2j * np.pi * f * true[:, None]) * (1 + 0.1 * rng.standard_normal((2, nb)))
     start = np.round(true * FS) / FS
     tau, r, _ = refine_peaks(G, np.arange(2), f[0], 1.0, start,
-                             start - 1 / FS, start + 1 / FS, 20)
+                             start - 1 / FS, start + 1 / FS, 20, 1e-9 / FS)
     for i in range(2):
         grid = np.linspace(start[i] - 1 / FS, start[i] + 1 / FS, 20001)
         vals = np.real(np.exp(2j * np.pi * np.outer(grid, f)) @ G[i])
