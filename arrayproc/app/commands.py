@@ -346,6 +346,46 @@ def _products_source(products: str) -> str | None:
     return str(p) if p.exists() else None
 
 
+# -- export -----------------------------------------------------------------------------------
+def export(files: Sequence[str], to: str, output: str,
+           origin: tuple[float, float] = (0.0, 0.0)) -> int:
+    """Write products or tracks files in an exchange format (issue 19).
+
+    Parameters
+    ----------
+    files : sequence of str
+        ``raven``: products files with detections or bearings, consecutive recordings in time
+        order; ``rep``: one tracks file or products file with bearings.
+    to : {"raven", "rep"}
+        Raven selection table or Debrief replay file.
+    output : str
+        Text file to write.
+    origin : (float, float)
+        ``rep``: latitude and longitude (deg) of the world frame's origin.
+
+    Returns
+    -------
+    int
+        Selections (raven) or lines (rep) written.
+    """
+    from arrayproc.io import exports
+    from arrayproc.io.atomic import commit, discard, temporary_sibling
+    if to not in ("raven", "rep"):
+        raise ConfigError(f"export: --to must be raven or rep, not {to!r}")
+    if to == "rep" and len(files) != 1:
+        raise ConfigError("export: --to rep takes one file")
+    check_output(output, list(files))
+    tmp = temporary_sibling(output)
+    try:
+        n = (exports.write_raven(list(files), str(tmp)) if to == "raven"
+             else exports.write_rep(files[0], str(tmp), origin=origin))
+        commit(tmp, output)
+    except BaseException:
+        discard(tmp)
+        raise
+    return n
+
+
 # -- demo -------------------------------------------------------------------------------------
 def demo(output: str = "demo_out", progress: bool = False, echo: Echo = print) -> Path:
     """Simulate, process, track and plot the bundled examples (see :mod:`arrayproc.app.demo`).
@@ -439,6 +479,12 @@ def _run_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_export(args: argparse.Namespace) -> int:
+    n = export(args.files, args.to, args.output, origin=tuple(args.origin))
+    print(f"{args.output}: {n} {'selections' if args.to == 'raven' else 'lines'} written")
+    return 0
+
+
 def _run_demo(args: argparse.Namespace) -> int:
     demo(args.output, progress=progress_wanted(args))
     return 0
@@ -504,6 +550,15 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--no-progress", action="store_true")
     s.set_defaults(func=_run_track)
+
+    s = sub.add_parser("export", help="write Raven selection tables or Debrief REP files")
+    s.add_argument("files", nargs="+", help="products files (raven: in time order) or one "
+                   "tracks file (rep)")
+    s.add_argument("--to", required=True, choices=("raven", "rep"))
+    s.add_argument("-o", "--output", required=True, help="text file to write")
+    s.add_argument("--origin", type=float, nargs=2, default=(0.0, 0.0),
+                   metavar=("LAT", "LON"), help="rep: latitude/longitude of x = y = 0 (deg)")
+    s.set_defaults(func=_run_export)
 
     s = sub.add_parser("demo", help="simulate, process, track and plot the bundled example")
     s.add_argument("-o", "--output", default="demo_out", help="output directory")

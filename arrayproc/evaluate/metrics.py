@@ -294,7 +294,7 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
     root = prod["/"]
     rec_path = _str(root.get("recording", ""))
     try:
-        rec = Recording(rec_path)
+        rec = Recording(rec_path, require_geometry=False)
     except Exception as e:  # noqa: BLE001 - any open failure is the same user error
         raise FormatError(f"{tracks_path}: recording {rec_path!r} with the truth cannot be "
                           f"opened ({e})") from None

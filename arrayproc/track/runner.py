@@ -75,8 +75,8 @@ else:  # pragma: no cover
 
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
-_KEYS = {"filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings", "nav",
-         "params", "cone_gate", "level", *_PRIOR_KEYS}
+_KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings",
+         "nav", "params", "cone_gate", "level", *_PRIOR_KEYS}
 
 
 def load_tracker_config(path: str) -> dict[str, Any]:
@@ -365,7 +365,15 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
                 progress: bool = False) -> None:
     """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5`` (see the module doc)."""
     from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.track.multi import run_multi, tracker_mode
 
+    mode = tracker_mode(config_path)
+    if mode == "multi":  # [tracker] mode = "multi": every target (arrayproc.track.multi)
+        run_multi(products_path, config_path, out_path, progress=progress)
+        return
+    if mode != "single":
+        raise ConfigError(f"{config_path}: tracker.mode must be 'single' or 'multi', not "
+                          f"{mode!r}")
     cfg = load_tracker_config(config_path)
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
