@@ -28,6 +28,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from arrayproc.chain.reader import read_blocks
+
 
 def rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -50,13 +52,15 @@ class MemRecording:
     def pose(self, t: float):
         return self._pose
 
-    def blocks(self, n: int):
-        from arrayproc.chain import Block
-        for i, a in enumerate(range(0, self.n_samples, n)):
-            d = self.x[a:a + n]
-            yield Block(d, ("time", "channel"), a / self.fs, d.shape[0] / self.fs, self.fs,
-                        self.positions, pose=self._pose, index=i,
-                        meta={"sample0": a, "n_valid": d.shape[0]})
+    @property
+    def n_channels_file(self) -> int:
+        return self.x.shape[1]
+
+    def read(self, start: int, stop: int, dtype=np.float32) -> np.ndarray:
+        return np.asarray(self.x[start:stop], dtype)
+
+    def poses(self, t: np.ndarray) -> list:
+        return [self._pose] * len(t)
 
 
 def make_ping(n_el: int, fs: float, seed: int):
@@ -119,15 +123,15 @@ def main() -> None:
     wctx = RunContext(recording=small)
     for s in ws:
         s.bind(wctx)
-    list(ws[2](ws[1](ws[0](small.blocks(8192)))))
+    list(ws[2](ws[1](ws[0](read_blocks(small, 8192)))))
 
     rss0 = rss_mb()
     cpu0, t0 = time.process_time(), time.perf_counter()
-    out = list(cfar(mf(beams(rec.blocks(8192)))))
+    out = list(cfar(mf(beams(read_blocks(rec, 8192)))))
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     rss1 = rss_mb()
-    con = out[0].meta["contacts"]
-    cells = int(out[0].meta["cells"])
+    con = out[0].meta.extra["contacts"]
+    cells = int(out[0].meta.extra["cells"])
     n_rr = bk.range_rate_grid(rr, 1500.0, 4.0, 1500.0, False).size
     cube_gb = cells * 4 / 1e9
     best = int(np.argmax(con["snr_db"])) if con["snr_db"].size else None
@@ -150,12 +154,12 @@ def main() -> None:
 
     # matched filter alone vs plain fftconvolve, same beams and replicas
     from scipy.signal import fftconvolve
-    blk = next(beams(rec.blocks(8192)))
-    plan = blk.meta["plan"]
+    blk = next(beams(read_blocks(rec, 8192)))
+    plan = blk.meta.extra["plan"]
     rates, bank = mf._bank("bpsk", act.waveforms["bpsk"], plan.f0, plan.df, plan.n_bins)
     nb = args.ref_beams
-    nl = int(blk.meta["n_lags"])
-    z = blk.data[:nb]
+    nl = int(blk.meta.extra["n_lags"])
+    z = np.ascontiguousarray(blk.data.T[:nb])
     n_rep = int(np.ceil(4.0 / bk.doppler_scale(rates.max(), 1500.0) * plan.fs_bb)) + 2
     reps = np.fft.ifft(np.conj(bank), axis=1)[:, :n_rep].astype(np.complex64)  # p_d baseband
     t0 = time.perf_counter()
