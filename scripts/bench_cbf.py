@@ -36,8 +36,9 @@ import numpy as np
 
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.io.geometry import line_array
-from arrayproc.stages.beamform.cbf import CBF, time_window
+from arrayproc.stages.beamform.cbf import CBF
 from arrayproc.stages.passive.integrate import Integrate
 
 FS = 5120.0

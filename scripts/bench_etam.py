@@ -23,6 +23,7 @@ import numpy as np
 
 from arrayproc.app.api import build_chain, run_chain
 from arrayproc.chain import RunContext
+from arrayproc.chain.reader import read_blocks
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter
 from arrayproc.io.recording import Recording, RecordingWriter
@@ -86,7 +87,7 @@ def main() -> None:
             ibf = IBF(max_sources=3, band=BAND)
             ibf.bind(RunContext(sound_speed=C, recording=r))
             t0 = time.perf_counter()
-            cleaned = list(ibf(r.blocks(65536, 65536)))
+            cleaned = list(ibf(read_blocks(r, 65536, 65536)))
             ibf_s = time.perf_counter() - t0
             etam = ETAM(snapshots=10, band=BAND, beams={"start": 0.0, "stop": 180.0,
                                                         "count": 181})

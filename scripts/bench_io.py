@@ -18,6 +18,7 @@ import h5py
 import numpy as np
 
 from arrayproc.app.api import build_chain, run_chain
+from arrayproc.chain.reader import read_blocks
 from arrayproc.io.geometry import line_array
 from arrayproc.io.recording import Recording, RecordingWriter
 
@@ -51,7 +52,7 @@ def arrayproc_blocks(path: Path, nfft: int, hop: int) -> tuple[float, int]:
     n = 0
     acc = 0.0
     with Recording(path) as r:
-        for b in r.blocks(nfft, hop):
+        for b in read_blocks(r, nfft, hop):
             acc += float(b.data[0, 0])
             n += 1
     return time.perf_counter() - t, n

@@ -36,6 +36,7 @@ import numpy as np
 from scipy.special import gammaincc
 
 from arrayproc.chain import RunContext
+from arrayproc.chain.reader import read_blocks
 from arrayproc.io.recording import Recording
 from arrayproc.sim.run import simulate
 from arrayproc.sim.scenario import parse_scenario
@@ -81,7 +82,7 @@ def run(stage, path: Path, source=None) -> list:
     """Run one stage over a recording (or over the blocks of another stage)."""
     with Recording(path) as r:
         stage.bind(RunContext(sound_speed=C, recording=r))
-        return list(stage(source if source is not None else r.blocks(8192, 8192)))
+        return list(stage(source if source is not None else read_blocks(r, 8192, 8192)))
 
 
 def cell_power(blocks: list, cone: float, f: float = F_T) -> np.ndarray:

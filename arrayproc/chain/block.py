@@ -9,31 +9,7 @@ from typing import Any
 import numpy as np
 
 from arrayproc.chain.domains import META_TYPES, Domain
-
-
-@dataclass(frozen=True)
-class Pose:
-    """The array's pose at one instant.
-
-    Attributes
-    ----------
-    position : (2,) ndarray
-        Array reference point, x east / y north, m.
-    heading : float
-        Array heading, deg true (direction of the body x axis).
-    depth : float
-        Reference-point depth, m (0 when unknown).
-    speed : float
-        Speed over ground of the reference point, m/s (from the navigation track).
-    elements : (n, 3) ndarray
-        Element positions in the world frame (x east, y north, z down), m.
-    """
-
-    position: np.ndarray
-    heading: float
-    depth: float
-    speed: float
-    elements: np.ndarray
+from arrayproc.geo.pose import Pose
 
 
 @dataclass(frozen=True)

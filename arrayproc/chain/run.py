@@ -7,6 +7,7 @@ from typing import Any
 
 from arrayproc.chain.block import Block
 from arrayproc.chain.graph import ChainSpec, compose, drive, set_rates
+from arrayproc.chain.reader import count_blocks, read_blocks
 from arrayproc.chain.segments import warmup_margin
 from arrayproc.chain.stage import RunContext
 
@@ -33,8 +34,8 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     # it (rows after t_stop are dropped by the products writer's time window).
     stop = recording.n_samples if t_stop is None else min(recording.n_samples,
                                                           int(round((t_stop + margin) * fs)))
-    n = recording.n_blocks(spec.block, spec.block, start, stop)
-    source: Iterable[Block] = recording.blocks(spec.block, spec.block, start, stop)
+    n = count_blocks(recording, spec.block, spec.block, start, stop)
+    source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop)
     bar = None
     if progress:
         from tqdm import tqdm

@@ -239,8 +239,6 @@ def simulate(scen: Scenario, out_path: str | Path, progress: bool = False,
                 if bar is not None:
                     bar.update(k1 - k0)
             w.set_nav(*sim.nav())
-            if sim.active is not None:
-                w.set_active(*sim.active.recording_active())
             groups, gattrs = sim.truth()
             _write_truth(w, groups, gattrs)
     finally:

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from arrayproc.chain.reader import count_blocks, read_blocks
 from arrayproc.errors import FormatError
 from arrayproc.io.geometry import body_to_world, line_array, read_geometry_xml
 from arrayproc.io.recording import Recording
@@ -27,8 +28,8 @@ def test_write_read_identical_and_blocks_tile(tmp_path_factory, n, ch, nfft, hop
     p = write_recording(tmp_path_factory.mktemp("r") / "r.h5", x, chunk_samples=chunk)
     with Recording(p) as r:
         assert np.array_equal(r.read(), x)
-        blocks = list(r.blocks(nfft, hop))
-        assert len(blocks) == r.n_blocks(nfft, hop)
+        blocks = list(read_blocks(r, nfft, hop))
+        assert len(blocks) == count_blocks(r, nfft, hop)
         heads = []
         for k, b in enumerate(blocks):
             s = k * hop
@@ -46,14 +47,14 @@ def test_write_read_identical_and_blocks_tile(tmp_path_factory, n, ch, nfft, hop
 
 def test_blocks_cross_slab_boundaries(tmp_path, monkeypatch, rng):
     """Tiny slabs force many hyperslab reads; the blocks must not change."""
-    import arrayproc.io.recording as rec
+    import arrayproc.chain.reader as rec
     x = rng.standard_normal((5000, 3)).astype(np.float32)
     p = write_recording(tmp_path / "r.h5", x)
     with Recording(p) as r:
-        ref = [b.data.copy() for b in r.blocks(256, 100)]
+        ref = [b.data.copy() for b in read_blocks(r, 256, 100)]
     monkeypatch.setattr(rec, "SLAB_BYTES", 64)
     with Recording(p) as r:
-        got = [b.data for b in r.blocks(256, 100)]
+        got = [b.data for b in read_blocks(r, 256, 100)]
     assert len(ref) == len(got) and all(np.array_equal(a, b) for a, b in zip(ref, got))
 
 
@@ -67,7 +68,7 @@ def test_gains_applied_and_dead_channels_dropped(tmp_path, rng):
     with Recording(p) as r:
         assert r.n_channels == 3 and list(r.channels) == [0, 2, 3]
         assert np.allclose(r.positions, pos[[0, 2, 3]])
-        b = next(r.blocks(1000))
+        b = next(read_blocks(r, 1000))
         assert np.allclose(b.data, x[:, [0, 2, 3]] * np.array([1.0, 0.5, 3.0], np.float32))
 
 
@@ -151,7 +152,7 @@ def test_nan_policy_zero_counts(tmp_path):
     x[50, 0] = np.inf
     p = write_recording(tmp_path / "r.h5", x)
     with Recording(p) as r, pytest.raises(FormatError, match="sample 10, channel 1"):
-        list(r.blocks(32))
+        list(read_blocks(r, 32))
     with Recording(p, nan="zero") as r:
-        data = np.concatenate([b.data for b in r.blocks(32)])[:100]
+        data = np.concatenate([b.data for b in read_blocks(r, 32)])[:100]
         assert r.n_nonfinite == 2 and data[10, 1] == 0 and data[50, 0] == 0

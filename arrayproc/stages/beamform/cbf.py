@@ -45,7 +45,6 @@ import sys
 from collections.abc import Iterator
 
 import numpy as np
-from scipy.signal import get_window
 
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
@@ -54,7 +53,9 @@ from arrayproc.dsp import fft, workers
 from arrayproc.dsp.blas_threads import set_local_threads
 from arrayproc.dsp.shading import KINDS as SHADINGS
 from arrayproc.dsp.shading import shading_weights
+from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
+from arrayproc.geo.beams import beam_directions
 from arrayproc.stages.beamform import _kernels as kb
 
 WINDOWS = ("none", "hann", "hamming", "blackman", "blackmanharris")
@@ -69,60 +70,6 @@ def _aligned(shape: tuple[int, ...], align: int = 64) -> np.ndarray:
     raw = np.empty(n + align // 4, np.float32)
     off = (-raw.ctypes.data % align) // 4
     return raw[off:off + n].reshape(shape)
-
-
-def time_window(name: str, nfft: int) -> np.ndarray:
-    """Periodic time taper of length ``nfft`` normalised to mean 1 (coherent gain 1)."""
-    if name == "none":
-        return np.ones(nfft)
-    w = get_window(name, nfft, fftbins=True)
-    return w / w.mean()
-
-
-def beam_directions(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
-    """Beam axis and unit direction vectors from a ``beams`` table.
-
-    Returns ``(axis, dirs, mode)``: ``axis`` cone angles (B,) deg or (B, 2) [bearing,
-    elevation] deg; ``dirs`` (B, 3) body-frame unit vectors (for cone beams only the x
-    component, cos θ, is used); ``mode`` is ``"cone"`` or ``"3d"``.
-    """
-    keys = set(beams)
-    if keys <= {"start", "stop", "count", "spacing"} and {"start", "stop", "count"} <= keys:
-        try:
-            a, b, n = float(beams["start"]), float(beams["stop"]), int(beams["count"])
-        except (TypeError, ValueError):
-            raise ConfigError("key 'beams': start, stop must be numbers and count an "
-                              "integer") from None
-        if n < 1 or not (0.0 <= a <= 180.0 and 0.0 <= b <= 180.0):
-            raise ConfigError("key 'beams': cone angles must lie in [0, 180] deg and count >= 1")
-        spacing = beams.get("spacing", "angle")
-        if spacing == "angle":
-            cone = np.linspace(a, b, n)
-        elif spacing == "cos":
-            cone = np.rad2deg(np.arccos(np.linspace(np.cos(np.deg2rad(a)),
-                                                    np.cos(np.deg2rad(b)), n)))
-        else:
-            raise ConfigError("key 'beams': spacing must be 'angle' or 'cos'")
-        dirs = np.zeros((n, 3))
-        dirs[:, 0] = np.cos(np.deg2rad(cone))
-        return cone, dirs, "cone"
-    if "bearings" in keys and keys <= {"bearings", "elevations"}:
-        try:
-            brg = np.asarray(beams["bearings"], float).reshape(-1)
-            elv = np.asarray(beams.get("elevations", [0.0]), float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ConfigError("key 'beams': bearings and elevations must be lists of "
-                              "numbers") from None
-        if brg.size == 0 or elv.size == 0 or np.any(np.abs(elv) > 90):
-            raise ConfigError("key 'beams': need at least one bearing and elevations in "
-                              "[-90, 90] deg")
-        e, b = np.meshgrid(np.deg2rad(elv), np.deg2rad(brg), indexing="ij")
-        e, b = e.ravel(), b.ravel()
-        dirs = np.stack([np.cos(e) * np.cos(b), np.cos(e) * np.sin(b), -np.sin(e)], -1)
-        axis = np.stack([np.rad2deg(b), np.rad2deg(e)], -1)
-        return axis, dirs, "3d"
-    raise ConfigError("key 'beams': expected {start, stop, count} (cone angles, deg) or "
-                      "{bearings = [...], elevations = [...]} (deg)")
 
 
 def pair_directions(dirs: np.ndarray, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray,
@@ -217,7 +164,7 @@ class CBF(Stage):
             raise ConfigError(f"{w}: {e}") from None
         self._unique, self._uidx, self._sign = pair_directions(self._dirs)
         self._runs = kb.beam_runs(self._uidx, self._sign)
-        self._win = time_window(self.window, self.nfft).astype(np.float32)
+        self._win = time_taper(self.window, self.nfft).astype(np.float32)
         self._key = None
 
     # -- set-up per stream -------------------------------------------------------------

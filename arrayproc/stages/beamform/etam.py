@@ -35,19 +35,9 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta, Synthetic
 from arrayproc.errors import ConfigError
+from arrayproc.geo.beams import cone_axis
 from arrayproc.stages.beamform import _sa_kernels as ks
-from arrayproc.stages.beamform.ibf import element_spectra, line_geometry, rule_snapshot_seconds
-
-
-def cone_axis(beams: dict) -> np.ndarray:
-    """Cone angles (deg) of a ``{start, stop, count}`` beams table."""
-    try:
-        a, b, n = float(beams["start"]), float(beams["stop"]), int(beams["count"])
-    except (KeyError, TypeError, ValueError):
-        raise ConfigError("key 'beams': expected {start, stop, count} cone angles (deg)") from None
-    if n < 1 or not (0 <= a <= 180 and 0 <= b <= 180) or set(beams) - {"start", "stop", "count"}:
-        raise ConfigError("key 'beams': expected {start, stop, count} with angles in [0, 180]")
-    return np.linspace(a, b, n)
+from arrayproc.stages.beamform._common import element_spectra, line_geometry, rule_snapshot_seconds
 
 
 class _SyntheticAperture(Stage):

@@ -26,8 +26,8 @@ from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
 from arrayproc.errors import ConfigError
-from arrayproc.stages._common import SpectraFramer, snapshot_seconds, uniform_line
 from arrayproc.stages.beamform import _sa_kernels as ks
+from arrayproc.stages.beamform._common import element_spectra, line_geometry, rule_snapshot_seconds
 
 
 def plane_wave(freqs: np.ndarray, x: np.ndarray, u: np.ndarray, c: float) -> np.ndarray:
@@ -247,70 +247,3 @@ class IBF(Stage):
         return spec.replace(data=data)
 
 
-def line_geometry(name: str, positions: np.ndarray) -> tuple[np.ndarray, float]:
-    """Element order and spacing of a uniform line array, or a ConfigError naming the stage."""
-    try:
-        return uniform_line(positions)
-    except ConfigError as e:
-        raise ConfigError(f"stage {name!r}: {e}") from None
-
-
-def make_framer(stage: Stage, b: Block) -> SpectraFramer:
-    """The element-spectra framer of a stage with ``snapshot``/``nfft``/``window``/``band``
-    keys: the snapshot length from the nav speed (thesis eq. 2.32 or 2.52, rounded up to an
-    FFT-friendly number of samples) or given."""
-    if stage.snapshot == "nfft":
-        nfft = stage.nfft
-    else:
-        _, dx = line_geometry(stage.name, b.positions)
-        speed = b.pose.speed if b.pose is not None else 0.0
-        try:
-            tb = snapshot_seconds(stage.snapshot, b.positions.shape[0], dx, speed)
-        except ConfigError as e:
-            raise ConfigError(f"stage {stage.name!r}: {e}") from None
-        # rounded up to an FFT-friendly length (at most a few per mille longer than T_B)
-        nfft = fft.next_fast_len(int(round(tb * b.fs)))
-    rec = stage.ctx.recording
-    nav = rec.nav if rec is not None else None
-    return SpectraFramer(nfft, nfft, stage.window,
-                         None if stage.band is None else tuple(stage.band), nav)
-
-
-def element_spectra(stage: Stage, blocks: Iterator[Block]) -> Iterator[Block]:
-    """The element-spectra blocks of a stage's input: time blocks are framed (see
-    :func:`make_framer`), spectra blocks pass as they are."""
-    framer: SpectraFramer | None = None
-    for b in blocks:
-        if b.domain is Domain.TIME:
-            if framer is None:
-                framer = make_framer(stage, b)
-            spec = framer.push(b)
-            if spec is not None:
-                yield spec
-        elif b.domain is Domain.SPECTRA:
-            yield b
-        else:
-            raise ConfigError(f"stage {stage.name!r}: needs time or element-spectra input, "
-                              f"got {b.domain}")
-
-
-def rule_snapshot_seconds(stage: Stage) -> float | None:
-    """T_B (s) of a stage with ``snapshot``/``nfft`` keys, known before data flows: given
-    (``nfft``), that of element spectra from upstream, or from the recording's median nav
-    speed (eq. 2.32 / 2.52, before rounding to an FFT size). None when unknown."""
-    if stage.snapshot == "nfft":
-        return stage.nfft / stage.fs_in if stage.fs_in else None
-    up = stage.upstream.snapshot_seconds() if stage.upstream is not None else None
-    if up is not None:
-        return up
-    rec = stage.ctx.recording
-    if rec is None or rec.nav.time.size < 2:
-        return None
-    try:
-        _, dx = uniform_line(rec.positions)
-    except ConfigError:
-        return None
-    speed = float(np.median(rec.nav.at(rec.nav.time)[3]))
-    if not speed > 0:
-        return None
-    return snapshot_seconds(stage.snapshot, rec.positions.shape[0], dx, speed)

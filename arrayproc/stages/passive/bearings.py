@@ -34,11 +34,12 @@ import numpy as np
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
+from arrayproc.dsp.bands import band_bins
 from arrayproc.dsp.peaks import pick_peaks
 from arrayproc.dsp.tpsw import tpsw
+from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
-from arrayproc.stages.passive.btr import band_bins, snapshot_times
-from arrayproc.stages.passive.integrate import check_power_block
+from arrayproc.stages.passive._common import check_power_block, snapshot_times
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
            "freq_lo", "freq_hi", "spl_db")
@@ -61,8 +62,7 @@ def received_level_offset_db(b: Block, broadband: bool) -> float:
     n_s = m.synthetic.snapshots if m.synthetic is not None else 1
     off = 10 * np.log10(n_b * (n_h * nfft * n_s) ** 2 / 2.0)
     if broadband:
-        from arrayproc.stages.beamform.cbf import time_window
-        off += 10 * np.log10(np.mean(time_window(str(m.window), int(nfft)) ** 2))
+        off += 10 * np.log10(np.mean(time_taper(str(m.window), int(nfft)) ** 2))
     return float(off)
 
 

@@ -18,31 +18,8 @@ import numpy as np
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
-from arrayproc.errors import ConfigError
-from arrayproc.stages.passive.integrate import check_power_block
-
-
-def band_bins(freqs: np.ndarray, band: list[float] | None, where: str) -> np.ndarray:
-    """Indices of ``freqs`` inside ``band`` (all when None); ConfigError naming 'band' if none."""
-    if band is None:
-        return np.arange(freqs.size)
-    idx = np.flatnonzero((freqs >= band[0]) & (freqs <= band[1]))
-    if idx.size == 0:
-        raise ConfigError(f"{where}: key 'band' {band} holds none of the input's bins "
-                          f"({freqs[0]:g}-{freqs[-1]:g} Hz)")
-    return idx
-
-
-def beam_columns(beams: np.ndarray) -> dict[str, np.ndarray]:
-    """Static beam-axis datasets for products: cone angles, or bearing and elevation."""
-    b = np.asarray(beams, float)
-    if b.ndim == 1:
-        return {"cone_deg": b}
-    return {"cone_deg": b[:, 0], "elevation_deg": b[:, 1]}
-
-
-def snapshot_times(b: Block) -> np.ndarray:
-    return np.asarray(b.meta.times, float)
+from arrayproc.dsp.bands import band_bins
+from arrayproc.stages.passive._common import beam_columns, check_power_block, snapshot_times
 
 
 @register

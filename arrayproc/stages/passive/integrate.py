@@ -26,8 +26,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, Integration
 from arrayproc.dsp import workers
-from arrayproc.errors import ConfigError
-from arrayproc.stages.beamform._kernels import abs2, power_sums
+from arrayproc.stages.passive._kernels import abs2, power_sums
 
 
 def _circ_mean_deg(a: np.ndarray, axis: int = -1) -> np.ndarray:
@@ -145,8 +144,3 @@ class Integrate(Stage):
             lambda i: power_sums(*args, edges[i], edges[i + 1], o2, acc), range(n_thr)))
 
 
-def check_power_block(stage: Stage, b: Block) -> None:
-    """Raise a ConfigError naming ``stage`` unless ``b`` is a power block from ``integrate``."""
-    if b.domain is not Domain.POWER or np.iscomplexobj(b.data):
-        raise ConfigError(f"stage {stage.name!r}: needs power blocks from 'integrate', "
-                          f"got {b.domain}")

@@ -19,10 +19,10 @@ import numpy as np
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
+from arrayproc.dsp.bands import band_bins
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.errors import ConfigError
-from arrayproc.stages.passive.btr import band_bins, beam_columns, snapshot_times
-from arrayproc.stages.passive.integrate import check_power_block
+from arrayproc.stages.passive._common import beam_columns, check_power_block, snapshot_times
 
 
 def _beams_check(v) -> str | None:

@@ -10,10 +10,12 @@ from hypothesis import strategies as st
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform import _kernels as kb
-from arrayproc.stages.beamform.cbf import CBF, beam_power_reference, time_window
+from arrayproc.stages.beamform.cbf import CBF, beam_power_reference
+from arrayproc.stages.passive import _kernels as kp
 
 C = 1500.0
 
@@ -239,7 +241,7 @@ def test_kernels_against_numpy(rng):
     assert np.all(y[:, [0, 5]] == 0)
     # abs2 and window sums
     p = np.empty(y.size, np.float32)
-    kb.abs2(y.reshape(-1), p)
+    kp.abs2(y.reshape(-1), p)
     assert np.allclose(p, np.abs(y.reshape(-1)) ** 2, rtol=1e-6)
 
 
@@ -258,7 +260,7 @@ def test_power_sums_against_numpy(h, t, n, step, seed):
         return
     k = (rows.shape[0] - n) // step + 1
     out = np.full((k, m), -1.0, np.float32)
-    kb.power_sums(head, y, n, step, 2, 6, out, np.empty(m))
+    kp.power_sums(head, y, n, step, 2, 6, out, np.empty(m))
     want = np.stack([rows[i * step:i * step + n].astype(np.float64).sum(0) for i in range(k)])
     np.testing.assert_allclose(out[:, 2:6], want[:, 2:6], rtol=1e-5)
     assert np.all(out[:, :2] == -1) and np.all(out[:, 6:] == -1)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from arrayproc.chain import RunContext, build_chain, run_chain
+from arrayproc.chain.reader import read_blocks
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter, read_products
@@ -23,7 +24,7 @@ LAM = C / F_T
 def run_stage(stage, path):
     with Recording(path) as r:
         stage.bind(RunContext(sound_speed=C, recording=r))
-        return list(stage(r.blocks(8192, 8192)))
+        return list(stage(read_blocks(r, 8192, 8192)))
 
 
 def cell(blocks, cone=90.0, f=F_T):
@@ -189,7 +190,7 @@ def test_config_errors(tmp_path):
     with Recording(p) as r, pytest.raises(ConfigError, match="stationary"):
         st = ETAM(snapshots=2)
         st.bind(RunContext(sound_speed=C, recording=r))
-        list(st(r.blocks(1024, 1024)))
+        list(st(read_blocks(r, 1024, 1024)))
     # not a line array
     pos = np.random.default_rng(0).normal(size=(8, 3))
     p = write_recording(tmp_path / "v.h5", np.zeros((4096, 8), np.float32), fs=FS,
@@ -197,7 +198,7 @@ def test_config_errors(tmp_path):
     with Recording(p) as r, pytest.raises(ConfigError, match="line array"):
         st = ETAM(snapshots=2, snapshot="nfft", nfft=1024)
         st.bind(RunContext(sound_speed=C, recording=r))
-        list(st(r.blocks(1024, 1024)))
+        list(st(read_blocks(r, 1024, 1024)))
 
 
 def test_etam_off_broadside_with_doppler(tmp_path):
@@ -217,7 +218,7 @@ def test_etam_off_broadside_with_doppler(tmp_path):
 def test_etam_stage_matches_the_numpy_reference(tmp_path):
     """The whole stage (framing, sub-aperture beams, eq. 2.53-2.54 phases, combination)
     against a plain-numpy implementation of the same equations."""
-    from arrayproc.stages._common import SpectraFramer
+    from arrayproc.stages.beamform._common import SpectraFramer
     from arrayproc.stages.beamform.etam import etam_reference
     tb = 4.0
     u = (N - 1) * DX / (2 * tb)
@@ -226,7 +227,7 @@ def test_etam_stage_matches_the_numpy_reference(tmp_path):
     kw = dict(band=[240.0, 310.0], beams={"start": 0.0, "stop": 180.0, "count": 37})
     with Recording(p) as r:
         fr = SpectraFramer(4096, 4096, "none", (240.0, 310.0), r.nav)
-        specs = [s for b in r.blocks(8192, 8192) if (s := fr.push(b)) is not None]
+        specs = [s for b in read_blocks(r, 8192, 8192) if (s := fr.push(b)) is not None]
     frames = [s.data[i].astype(complex) for s in specs for i in range(s.data.shape[0])]
     ours = run_stage(ETAM(snapshots=10, **kw), p)
     ref = etam_reference(frames, specs[0].freqs, specs[0].positions[:, 0], u * tb, 32, 10,
