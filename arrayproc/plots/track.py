@@ -46,12 +46,17 @@ def _read_truth(recording: str) -> dict[str, np.ndarray]:
 
 
 @register_plot("track")
-def plot_track(tracks_path: str, out_png: str, ellipse_every: int = 5,
-               truth: Mapping[str, np.ndarray] | None = None, title: str | None = None,
+def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
+               truth: Mapping[str, np.ndarray] | bool | None = None, title: str | None = None,
                **_: Any) -> None:
-    """Plan view of a tracks file: ownship, each track's estimate with 2σ position ellipses every
-    ``ellipse_every`` points, and the truth (from ``truth`` {name: (n, 2) m} or the recording's
-    ``/truth/sources`` when the tracks file names it)."""
+    """Plan view of a tracks file read at a glance: the ownship path; each track in its own
+    colour with its id at its last point (multi-target files: confirmed rows once the
+    left-right weight of one side reaches 90 %; a single-target file starts at its first
+    update, not at the prior); 2σ position ellipses
+    every ``ellipse_every`` rows (default: about six per track); the truth of each source in
+    its own dashed colour, named at its end (``truth`` {name: (n, 2) m}, or the recording's
+    ``/truth/sources`` when the tracks file names it; False: none), over the tracks' time
+    span."""
     from arrayproc.io.products import read_products
 
     prod = read_products(tracks_path)
@@ -60,31 +65,89 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int = 5,
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]
     root = prod["/"]
-    if truth is None:
+    t_all = np.asarray(g["time"], float) if "time" in g else np.zeros(0)
+    tspan = (float(t_all.min()), float(t_all.max())) if t_all.size else None
+    truth_times: dict[str, np.ndarray] = {}
+    if truth is None or truth is True:
         rec = root.get("recording", "")
-        truth = _read_truth(rec.decode() if isinstance(rec, bytes) else str(rec))
-    fig, ax = plt.subplots(figsize=(7, 6))
-    if "own_x" in g:
-        ax.plot(g["own_x"] / 1e3, g["own_y"] / 1e3, "k-", lw=1.5, label="ownship")
-        ax.plot(g["own_x"][0] / 1e3, g["own_y"][0] / 1e3, "ko", ms=4)
-    for name, p in truth.items():
-        ax.plot(p[:, 0] / 1e3, p[:, 1] / 1e3, "g--", lw=1.5, label=f"truth {name}")
-    for tid in np.unique(g["track_id"]):
-        m = g["track_id"] == tid
+        truth, truth_times = _read_truth_timed(rec.decode() if isinstance(rec, bytes)
+                                               else str(rec))
+    elif truth is False:
+        truth = {}
+    fig, ax = plt.subplots(figsize=(8, 7))
+    if "own_x" in g and t_all.size:
+        o = np.argsort(t_all, kind="stable")
+        ax.plot(g["own_x"][o] / 1e3, g["own_y"][o] / 1e3, "k-", lw=2, label="ownship")
+        ax.plot(g["own_x"][o][0] / 1e3, g["own_y"][o][0] / 1e3, "ko", ms=5)
+    tcol = plt.get_cmap("Dark2")
+    for k, (name, p) in enumerate(sorted(truth.items())):
+        if name in truth_times and tspan is not None:
+            tt = truth_times[name]
+            keep = (tt >= tspan[0]) & (tt <= tspan[1])
+            p = p[keep] if keep.any() else p
+        c = tcol(k % 8)
+        ax.plot(p[:, 0] / 1e3, p[:, 1] / 1e3, "--", color=c, lw=2.2, alpha=0.8,
+                label=f"truth {name}")
+        ax.annotate(name, (p[-1, 0] / 1e3, p[-1, 1] / 1e3), color=c, fontsize=9,
+                    xytext=(4, -10), textcoords="offset points", fontstyle="italic")
+    multi = _s(dict(g.get("attrs") or {}).get("mode", "")) == "multi"
+    status = np.array([_s(v) for v in g["status"]]) if "status" in g else None
+    ids = np.unique(g["track_id"])
+    cmap = plt.get_cmap("tab10")
+    for k, tid in enumerate(ids):
+        m = np.flatnonzero(g["track_id"] == tid)
+        m = m[np.argsort(t_all[m], kind="stable")]
+        if status is not None and multi:
+            m = m[status[m] == "confirmed"]
+        elif m.size > 1:
+            m = m[1:]  # the first row of a single-target file is the prior
+        if multi and "side_weight" in g:
+            # before the left-right ambiguity resolves, eq. (12) averages the two mirror
+            # hypotheses onto the array axis: show positions once one side holds 90 %
+            sw = np.asarray(g["side_weight"], float)[m]
+            m = m[~np.isfinite(sw) | (np.abs(sw - 0.5) >= 0.4)]
+        if m.size == 0:
+            continue
         x, y, cov = g["x"][m], g["y"][m], g["cov"][m]
-        ax.plot(x / 1e3, y / 1e3, "b.-", ms=3, lw=1, label=f"track {tid}")
-        for i in range(0, x.size, max(1, int(ellipse_every))):
-            _ellipse(ax, np.array([x[i], y[i]]), cov[i, :2, :2], ec="tab:blue", lw=0.6,
-                     alpha=0.6)
+        c = cmap(k % 10)
+        ax.plot(x / 1e3, y / 1e3, ".-", color=c, ms=2.5, lw=1.2, label=f"track {tid}")
+        every = int(ellipse_every) if ellipse_every else max(1, x.size // 6)
+        for i in range(every // 2, x.size, max(1, every)):
+            _ellipse(ax, np.array([x[i], y[i]]), cov[i, :2, :2], ec=c, lw=0.8, alpha=0.7)
+        ax.annotate(str(tid), (x[-1] / 1e3, y[-1] / 1e3), color=c, fontsize=10,
+                    fontweight="bold", xytext=(4, 4), textcoords="offset points")
     ax.set_xlabel("x east (km)")
     ax.set_ylabel("y north (km)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="best", fontsize=8, ncol=2)
     ax.set_title(title or f"{os.path.basename(tracks_path)} (2σ ellipses)")
     fig.tight_layout()
     fig.savefig(out_png, dpi=120)
     plt.close(fig)
+
+
+def _s(v: Any) -> str:
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _read_truth_timed(recording: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Truth positions {name: (n, 2) m} and their times {name: (n,) s} of a recording."""
+    pos: dict[str, np.ndarray] = {}
+    times: dict[str, np.ndarray] = {}
+    if not recording or not os.path.exists(recording):
+        return pos, times
+    try:
+        with h5py.File(recording, "r") as f:
+            if "truth/sources" in f:
+                for name, g in f["truth/sources"].items():
+                    if "position" in g:
+                        pos[name] = np.asarray(g["position"][()], float)
+                        if "time" in g:
+                            times[name] = np.asarray(g["time"][()], float).reshape(-1)
+    except OSError:
+        return {}, {}
+    return pos, times
 
 
 def plot_rmse(times_s: np.ndarray, curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
