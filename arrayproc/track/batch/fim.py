@@ -297,13 +297,14 @@ def crlb_from_fim(fim: np.ndarray, tol: float = PD_TOL) -> tuple[np.ndarray, np.
     positive_definite : (...) bool ndarray
     """
     f = np.asarray(fim, float)
-    f = 0.5 * (f + np.swapaxes(f, -1, -2))
+    finite = np.all(np.isfinite(f), axis=(-2, -1))
+    f = np.where(finite[..., None, None], 0.5 * (f + np.swapaxes(f, -1, -2)), 0.0)
     d = np.sqrt(np.abs(np.diagonal(f, axis1=-2, axis2=-1)))
     ok_diag = np.all(d > 0, axis=-1)
     dd = np.where(d > 0, d, 1.0)
     fn = f / (dd[..., :, None] * dd[..., None, :])
     lam = np.linalg.eigvalsh(fn)
-    pd = ok_diag & np.all(np.isfinite(fn), axis=(-2, -1)) & (lam[..., 0] > tol)
+    pd = ok_diag & finite & (lam[..., 0] > tol)
     eye = np.broadcast_to(np.eye(f.shape[-1]), f.shape)
     inv = np.linalg.inv(np.where(pd[..., None, None], fn, eye))
     inv = inv / (dd[..., :, None] * dd[..., None, :])
@@ -320,13 +321,16 @@ def condition_number(fim: np.ndarray) -> np.ndarray:
     Returns
     -------
     (...) ndarray
-        Ratio of the largest to the smallest eigenvalue of the symmetric J.
+        Ratio of the largest to the smallest eigenvalue of the symmetric J (``inf`` for a
+        non-finite J, e.g. a source on an element).
     """
     f = np.asarray(fim, float)
+    finite = np.all(np.isfinite(f), axis=(-2, -1))
+    f = np.where(finite[..., None, None], f, 0.0)
     lam = np.linalg.eigvalsh(0.5 * (f + np.swapaxes(f, -1, -2)))
     with np.errstate(divide="ignore", invalid="ignore"):
         k = lam[..., -1] / lam[..., 0]
-    return np.where(lam[..., 0] > 0, k, np.inf)
+    return np.where(finite & (lam[..., 0] > 0), k, np.inf)
 
 
 def range_sigma(rel_xy: np.ndarray, crlb: np.ndarray) -> np.ndarray:
