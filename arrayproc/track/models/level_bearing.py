@@ -58,11 +58,7 @@ class LevelBearing(MeasurementModel):
         t = self.tl_table
         if isinstance(t, str):
             path = t if ("/" in t or t.endswith(".h5")) else default_table_path(t)
-            try:
-                t = TLTable.load(path)
-            except (OSError, KeyError) as e:
-                raise ConfigError(f"{self.name}.tl_table: cannot load {self.tl_table!r}: {e}"
-                                  ) from None
+            t = TLTable.load(path)  # FormatError naming the file if it is not a table
         elif not isinstance(t, TLTable):
             raise ConfigError(f"{self.name}.tl_table: expected a table name, path or TLTable")
         r0, dr, tl = t.range_profile(self.src_depth_m, self.rcv_depth_m)

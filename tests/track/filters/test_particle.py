@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from arrayproc.acoustics.tl import load_default_table
-from arrayproc.errors import ConfigError
+from arrayproc.errors import ArrayprocError, ConfigError
 from arrayproc.evaluate.scenarios import get_scenario
 from arrayproc.track.crlb import position_rmse_bound
-from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig
+from arrayproc.track.filters.particle import RegularizedParticleFilter, RPFConfig
 
 
 @pytest.fixture(scope="module")
@@ -154,31 +154,42 @@ def test_rpf_through_the_tracker_registry():
         track_bearings(d.times, zs, own, dict(cfg, model="ct"))
 
 
-def test_rpf_tracker_step_interface_uses_levels():
-    """RPFTracker with a TL table and levels (SPL paper eqs. (31)-(33)) on the static scenario:
-    errors at 63 min far below the same tracker without levels (table 1's 203 m vs 4338 m)."""
+def test_rpf_step_interface_uses_levels():
+    """The step RPF with the level + bearing measurement model (SPL paper eqs. (31)-(33)) on
+    the static scenario: errors at 63 min far below the same filter on bearings alone (table
+    1's 203 m vs 4338 m)."""
+    from arrayproc.track.filters.particle import RPF
     from arrayproc.track.init import TrackPrior, init_from_bearing
-    from arrayproc.track.models import constant_velocity
-    from arrayproc.track.pf import RPFTracker
+    from arrayproc.track.models.bearing import Bearing
+    from arrayproc.track.models.level_bearing import LevelBearing
+    from arrayproc.track.models.motion import constant_turn, constant_velocity
+    from arrayproc.track.state import Context
 
     sc = get_scenario("static")
     d = sc.simulate(4, 8)
     own = np.hstack([d.observer_pos, sc.observer.state(d.times)[1]])
     prior = TrackPrior(sigma_bearing_deg=1.5, range_m=10e3, sigma_range_m=2e3, speed_mps=1.54,
                        sigma_speed_mps=1.03, sigma_course_deg=51.96)
+    cv = constant_velocity()
+    models = {False: Bearing(sigma_deg=1.5),
+              True: LevelBearing(sigma_deg=1.5, tl_table="munk_bellhopcxx_incoherent")}
     err = {}
     for use in (False, True):
         e = []
         for r in range(4):
-            f = RPFTracker(constant_velocity(), 1.5, n_particles=2000, sigma_a=1.5e-3, seed=r,
-                           tl_table="munk_bellhopcxx_incoherent" if use else None)
-            f.initialize(*init_from_bearing(d.bearings_deg[r, 0], own[0], prior, 4))
+            f = RPF(n_particles=2000, sigma_a=1.5e-3, seed=r)
+            s = f.initialize(*init_from_bearing(d.bearings_deg[r, 0], own[0], prior, 4))
             for k in range(1, 64):
-                f.predict(60.0, own[k - 1], own[k])
-                lp = f.update(d.bearings_deg[r, k], d.levels_db[r, k] if use else None)
+                ctx = Context(own[k], own[k - 1])
+                s = f.predict(s, cv, 60.0, ctx)
+                th = np.deg2rad(d.bearings_deg[r, k])
+                z = [th, d.levels_db[r, k]] if use else [th]
+                s, lp = f.update(s, z, models[use], ctx)
                 assert np.isfinite(lp)
-            e.append(np.hypot(*(f.x[:2] + own[63, :2] - d.truth[63, :2])))
+            e.append(np.hypot(*(s.x[:2] + own[63, :2] - d.truth[63, :2])))
         err[use] = np.sqrt(np.mean(np.square(e)))
     assert err[True] < 0.3 * err[False]
+    with pytest.raises(ArrayprocError, match="no_such_table"):
+        LevelBearing(tl_table="no_such_table")
     with pytest.raises(ConfigError):
-        RPFTracker(constant_velocity(), 1.5, n_particles=100).update(10.0, 80.0)
+        f.predict(s, constant_turn(), 60.0, ctx)

@@ -8,33 +8,34 @@ import numpy as np
 import pytest
 
 from arrayproc.evaluate.montecarlo import LRScenario, run_case
-from arrayproc.track import _kernels as kc
 from arrayproc.track.filters import make_filter
-from arrayproc.track.init import init_from_bearing
-from arrayproc.track.lr import LRResolver
-from arrayproc.track.models import make_model
+from arrayproc.track.init import initial_state
+from arrayproc.track.manage import _kernels as kl
+from arrayproc.track.manage.lr import LRResolver, fused_kind
+from arrayproc.track.models.bearing import Bearing
+from arrayproc.track.models.motion import make_model
+from arrayproc.track.state import Context, GaussianState
 
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 
 
 class _Const:
-    """A stand-in filter with fixed likelihoods, to check eqs. (10)-(13) by hand."""
+    """A stand-in filter whose likelihood is the measurement itself, to check eqs. (10)-(13)
+    by hand."""
 
-    def __init__(self, x, P, ll):
-        self.x, self.P, self.ll = np.asarray(x, float), np.asarray(P, float), ll
+    def predict(self, state, motion_model, dt, ctx):
+        return state
 
-    def predict(self, *a):
-        pass
-
-    def update(self, z):
-        return self.ll
+    def update(self, state, z, measurement_model, ctx):
+        return state, z
 
 
 def test_weights_and_combination_eqs_10_to_13():
-    f1 = _Const([1.0, 2.0], np.eye(2), math.log(0.3))
-    f2 = _Const([3.0, -2.0], 2 * np.eye(2), math.log(0.1))
-    lr = LRResolver([f1, f2])
-    lr.step(1.0, None, None, [0.0, 0.0])
+    f1 = GaussianState([1.0, 2.0], np.eye(2))
+    f2 = GaussianState([3.0, -2.0], 2 * np.eye(2))
+    lr = LRResolver(_Const(), None, None, [f1, f2])
+    ctx = Context(np.zeros(4))
+    lr.step(1.0, ctx, [math.log(0.3), math.log(0.1)])
     w1 = 0.3 * 0.5 / (0.3 * 0.5 + 0.1 * 0.5)  # eq. (10)
     np.testing.assert_allclose(lr.weights, [w1, 1 - w1])
     x, P = lr.estimate()
@@ -43,7 +44,7 @@ def test_weights_and_combination_eqs_10_to_13():
     Pr = w1 * (f1.P + np.outer(d1, d1)) + (1 - w1) * (f2.P + np.outer(d2, d2))  # eq. (13)
     np.testing.assert_allclose(x, xr)
     np.testing.assert_allclose(P, Pr)
-    lr.step(1.0, None, None, [0.0, 0.0])  # recursion: ω_k ∝ p_k ω_{k−1}
+    lr.step(1.0, ctx, [math.log(0.3), math.log(0.1)])  # recursion: ω_k ∝ p_k ω_{k−1}
     w1b = 0.3 * w1 / (0.3 * w1 + 0.1 * (1 - w1))
     np.testing.assert_allclose(lr.weights[0], w1b)
 
@@ -51,40 +52,39 @@ def test_weights_and_combination_eqs_10_to_13():
 @pytest.mark.parametrize("name", FILTERS)
 @pytest.mark.parametrize("case", [1, 2])
 def test_kernel_lr_run_equals_python_resolver(name, case):
-    """The vectorised kernel (:func:`run_track`) and the per-step classes + LRResolver agree."""
+    """The fused Monte Carlo kernel (:func:`run_track`) and the per-step filter objects +
+    LRResolver run the same kernels: bit-identical weights, estimates and covariances."""
     scn = LRScenario(case=case)
     g = scn.geometry()
     y1, y2, draws, _ = scn.measurements(1, 11)
     model = make_model(scn.model_name)
-    filt = make_filter(name, model, scn.sigma_deg)
-    n = model.dim
+    filt = make_filter(name)
+    n = model.ndim
     K = g["times"].size
     xs, Ps, ws = np.empty((K, n)), np.empty((K, n, n)), np.empty((K, 2))
-    kind, U, wm, wc, Up, wmp, wcp = filt.kernel_args()
     zs = np.stack([y1[0], y2[0]], axis=1)
     p = scn.prior.as_array()
-    st = kc.run_track(kind, model.code, 2, g["times"], zs, g["own"], filt.sigma, model.q1,
-                      model.q2, p, draws[0], U, wm, wc, Up, wmp, wcp, xs, Ps, ws)
+    st = kl.run_track(fused_kind(filt), 2, g["times"], zs, g["own"], math.radians(scn.sigma_deg),
+                      model.q1, model.q2, p, draws[0], *filt.kernel_points(n), xs, Ps, ws)
     assert st & 4 == 0
 
     def fresh(z0):
-        f = make_filter(name, model, scn.sigma_deg)
-        x0, P0 = init_from_bearing(math.degrees(z0), g["own"][0], scn.prior, n)
+        x0, P0 = initial_state(z0, g["own"][0], scn.prior, n)
         c = z0 + math.pi + draws[0, 2]
         x0[:4] = (draws[0, 0] * math.sin(z0), draws[0, 0] * math.cos(z0),
                   draws[0, 1] * math.sin(c) - g["own"][0, 2],
                   draws[0, 1] * math.cos(c) - g["own"][0, 3])
-        f.initialize(x0, P0)
-        return f
+        return filt.initialize(x0, P0)
 
-    lr = LRResolver([fresh(y1[0, 0]), fresh(y2[0, 0])])
+    lr = LRResolver(filt, model, Bearing(sigma_deg=scn.sigma_deg),
+                    [fresh(y1[0, 0]), fresh(y2[0, 0])])
     for k in range(1, K):
-        lr.step(g["times"][k] - g["times"][k - 1], g["own"][k - 1], g["own"][k],
-                [math.degrees(y1[0, k]), math.degrees(y2[0, k])])
-        x, P = lr.estimate()
-        np.testing.assert_allclose(ws[k], lr.weights, rtol=1e-7, atol=1e-12)
-        np.testing.assert_allclose(xs[k], x, rtol=1e-8, atol=1e-8 * np.abs(x).max())
-        np.testing.assert_allclose(Ps[k], P, rtol=1e-6, atol=1e-8 * np.abs(P).max())
+        lr.step(g["times"][k] - g["times"][k - 1], Context(g["own"][k], g["own"][k - 1]),
+                [y1[0, k], y2[0, k]])
+        x, P, w = lr.combine()
+        np.testing.assert_array_equal(ws[k], w)
+        np.testing.assert_array_equal(xs[k], x)
+        np.testing.assert_array_equal(Ps[k], P)
 
 
 def test_ghost_dies_after_the_ownship_turn():
