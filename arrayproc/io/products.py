@@ -14,15 +14,14 @@ from typing import Any
 import h5py
 import numpy as np
 
-from arrayproc import __version__
 from arrayproc.errors import FormatError
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.recording import open_h5
+from arrayproc.io.schema import check_columns, check_group
+from arrayproc.io.schema import kind as schema_kind
 
 FORMAT = "arrayproc.products"
 FORMAT_VERSION = 1
-KINDS = ("btr", "lofar", "bearings", "delays", "contacts", "tracks", "power", "ibf_removed",
-         "psas", "detections")
 
 #: Target size of one chunk of a column dataset, bytes.
 CHUNK_BYTES = 1 << 18
@@ -35,10 +34,19 @@ class GroupWriter:
     segment with a warm-up margin writes only its own rows.
     """
 
-    def __init__(self, group: h5py.Group, time_window: tuple[float, float] | None = None):
+    def __init__(self, group: h5py.Group, time_window: tuple[float, float] | None = None,
+                 kind: str | None = None):
         self._g = group
         self._window = time_window
+        self.kind = kind
+        self._checked: set[str] = set()
         self.n_rows = 0
+
+    def _check(self, names: set[str]) -> None:
+        """Every dataset name must be declared for the group's kind (io/schema.py)."""
+        if self.kind is not None and not names <= self._checked:
+            check_columns(self.kind, names, self._g.name)
+            self._checked |= names
 
     @property
     def attrs(self) -> h5py.AttributeManager:
@@ -46,6 +54,7 @@ class GroupWriter:
 
     def set(self, name: str, data: np.ndarray, **attrs: Any) -> None:
         """Write a static dataset (e.g. an axis), replacing any earlier one."""
+        self._check({name})
         if name in self._g:
             del self._g[name]
         d = self._g.create_dataset(name, data=np.asarray(data))
@@ -55,6 +64,7 @@ class GroupWriter:
     def append(self, **columns: np.ndarray) -> None:
         """Append rows: every column has the same length along its first axis."""
         check_stop()
+        self._check(set(columns))
         cols = {k: np.asarray(v) for k, v in columns.items()}
         lengths = {v.shape[0] if v.ndim else 1 for v in cols.values()}
         if len(lengths) != 1:
@@ -100,7 +110,8 @@ class ProductsWriter(AtomicH5Writer):
         a["format_version"] = FORMAT_VERSION
         a["source"] = str(source)
         a["chain"] = chain
-        a["software_version"] = __version__
+        import arrayproc
+        a["software_version"] = arrayproc.__version__
         a["complete"] = False
         for k, v in (attrs or {}).items():
             a[k] = v
@@ -115,12 +126,13 @@ class ProductsWriter(AtomicH5Writer):
         if not name or "/" in name or name in (".", ".."):
             raise FormatError(f"{self.path}: products group name {name!r} is not a plain name "
                               "(no '/', not '.' or '..')")
+        schema_kind(kind)  # a declared kind (FormatError otherwise)
         g = self._f.create_group(name)
         g.attrs["kind"] = kind
         g.attrs["stage"] = stage or name
         for k, v in attrs.items():
             g.attrs[k] = v
-        w = GroupWriter(g, self._window)
+        w = GroupWriter(g, self._window, kind)
         self._groups[name] = w
         return w
 
@@ -182,5 +194,6 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
             for k, v in g.items():
                 if isinstance(v, h5py.Dataset):
                     d[k] = v[()]
+            check_group(name, d, str(path))
             out[name] = d
         return out

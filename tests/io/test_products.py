@@ -38,7 +38,7 @@ def test_append_round_trip(tmp_path_factory, sizes, width):
 def test_failed_run_leaves_nothing(tmp_path):
     p = tmp_path / "out.h5"
     with pytest.raises(RuntimeError), ProductsWriter(p) as w:
-        w.group("a", "bearings").append(time=np.arange(3.0))
+        w.group("a", "power").append(time=np.arange(3.0), power_db=np.zeros((3, 1)))
         raise RuntimeError("boom")
     assert list(tmp_path.iterdir()) == []
 
@@ -46,7 +46,7 @@ def test_failed_run_leaves_nothing(tmp_path):
 def test_incomplete_until_closed_and_atomic_rename(tmp_path):
     p = tmp_path / "out.h5"
     w = ProductsWriter(p)
-    w.group("a", "bearings").append(time=np.arange(3.0))
+    w.group("a", "power").append(time=np.arange(3.0), power_db=np.zeros((3, 1)))
     assert not p.exists()  # still under a temporary name
     w.close()
     with h5py.File(p) as f:
@@ -56,10 +56,22 @@ def test_incomplete_until_closed_and_atomic_rename(tmp_path):
 def test_time_window_keeps_segment_rows(tmp_path):
     p = tmp_path / "out.h5"
     with ProductsWriter(p, time_window=(1.0, 2.0)) as w:
-        w.group("a", "bearings").append(time=np.array([0.5, 1.0, 1.5, 2.0]),
-                                        level_db=np.arange(4.0))
+        w.group("a", "power").append(time=np.array([0.5, 1.0, 1.5, 2.0]),
+                                     power_db=np.arange(4.0)[:, None])
     d = read_products(p)["a"]
-    assert list(d["time"]) == [1.0, 1.5] and list(d["level_db"]) == [1.0, 2.0]
+    assert list(d["time"]) == [1.0, 1.5] and list(d["power_db"][:, 0]) == [1.0, 2.0]
+
+
+def test_schema_refuses_undeclared_kinds_and_columns_and_reads_check_required(tmp_path):
+    p = tmp_path / "out.h5"
+    with ProductsWriter(p) as w:
+        with pytest.raises(FormatError, match="unknown product kind 'bearing'"):
+            w.group("x", "bearing")
+        with pytest.raises(FormatError, match="level_dB are not declared for kind 'power'"):
+            w.group("a", "power").append(time=np.arange(2.0), level_dB=np.zeros(2))
+        w.group("b", "power").append(time=np.arange(2.0))  # power_db missing
+    with pytest.raises(FormatError, match="'b' .*lacks column.*power_db"):
+        read_products(p)
 
 
 def test_missing_directory_is_a_clear_error(tmp_path):

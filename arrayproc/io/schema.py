@@ -1,0 +1,266 @@
+"""Every product kind and its columns, in one place (DESIGN section 5).
+
+A products group has an attribute ``kind``; its *columns* are datasets with one row per
+snapshot, event, contact, track point or solution, appended as blocks come; its *axes* are
+static datasets written once (e.g. the beams' cone angles). The products writer refuses a
+kind or a column that is not declared here, the readers check that the required columns are
+present, and ``arrayproc info``, the plots and the trackers find groups and columns through
+this module.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from arrayproc.errors import FormatError
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column (or axis) of a product kind.
+
+    Attributes
+    ----------
+    unit : str
+        SI unit, ``dB re 1 µPa``, ``deg`` or ``""`` for counts, flags and names.
+    doc : str
+        What one value means.
+    required : bool
+        Whether every group of the kind has it.
+    """
+
+    unit: str
+    doc: str
+    required: bool = True
+
+
+@dataclass(frozen=True)
+class Kind:
+    """A product kind: what one row is, its columns and its static axes."""
+
+    name: str
+    row: str
+    columns: Mapping[str, Column]
+    axes: Mapping[str, Column] = field(default_factory=dict)
+
+    def names(self) -> set[str]:
+        """Every dataset name the kind may hold."""
+        return set(self.columns) | set(self.axes)
+
+    def required(self) -> list[str]:
+        """Columns every group of this kind must have."""
+        return [k for k, c in self.columns.items() if c.required]
+
+
+def _c(unit: str, doc: str, required: bool = True) -> Column:
+    return Column(unit, doc, required)
+
+
+_BEAM_AXES = {
+    "cone_deg": _c("deg", "cone angle of each beam (line arrays)", False),
+    "bearing_deg": _c("deg", "bearing of each beam (3-D steering)", False),
+    "elevation_deg": _c("deg", "elevation of each beam (3-D steering)", False),
+}
+
+_KINDS = [
+    Kind("power", "time block", {
+        "time": _c("s", "centre time of the block"),
+        "power_db": _c("dB re 1 µPa", "band power per channel, (n, n_ch)"),
+    }),
+    Kind("btr", "integrated snapshot", {
+        "time": _c("s", "centre time of the integrated snapshots"),
+        "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)"),
+    }, _BEAM_AXES),
+    Kind("lofar", "integrated snapshot", {
+        "time": _c("s", "centre time of the integrated snapshots"),
+        "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)"),
+    }, {**_BEAM_AXES, "freq": _c("Hz", "frequency of each bin")}),
+    Kind("bearings", "peak on a BTR row or a LOFAR line", {
+        "time": _c("s", "centre time of the snapshot"),
+        "cone_deg": _c("deg", "cone angle of the peak (0 forward end-fire)"),
+        "bearing_port_deg": _c("deg", "true bearing if the source is to port"),
+        "bearing_stbd_deg": _c("deg", "true bearing if the source is to starboard"),
+        "level_db": _c("dB re 1 µPa", "received level"),
+        "snr_db": _c("dB", "peak over the TPSW background"),
+        "freq_lo": _c("Hz", "lower edge of the band or line"),
+        "freq_hi": _c("Hz", "upper edge of the band or line"),
+        "spl_db": _c("dB re 1 µPa", "sound pressure level at the array (broadband)"),
+    }),
+    Kind("ibf_removed", "plane wave removed by inverse beamforming", {
+        "time": _c("s", "centre time of the snapshot"),
+        "cone_deg": _c("deg", "cone angle of the removed wave"),
+        "level_db": _c("dB re 1 µPa", "level of the removed wave"),
+        "snr_db": _c("dB", "SNR of the removed wave"),
+        "freq_lo": _c("Hz", "lower edge of the band"),
+        "freq_hi": _c("Hz", "upper edge of the band"),
+    }),
+    Kind("detections", "transient event on a reference channel", {
+        "time_start": _c("s", "start of the detection box"),
+        "time_end": _c("s", "end of the detection box"),
+        "freq_lo": _c("Hz", "lower edge of the detection box"),
+        "freq_hi": _c("Hz", "upper edge of the detection box"),
+        "snr_db": _c("dB", "peak band energy over the robust background"),
+        "channel": _c("", "reference channel"),
+    }),
+    Kind("delays", "snapshot or event", {
+        "time": _c("s", "centre time"),
+        "tau": _c("s", "delay of every channel relative to the reference, (n, n_ch)"),
+        "sigma": _c("s", "1-sigma of each delay, (n, n_ch)"),
+        "corr": _c("", "peak normalised correlation, (n, n_ch)"),
+    }),
+    Kind("positions", "localised event", {
+        "time": _c("s", "event time"),
+        "x": _c("m", "east"), "y": _c("m", "north"), "z": _c("m", "down"),
+        "cov": _c("m²", "position covariance, (n, 3, 3)"),
+        "tdoa_rms_s": _c("s", "RMS of the TDOA residuals"),
+        "n_used": _c("", "channel pairs used"),
+    }),
+    Kind("directions", "event localised in direction only (planar or line arrays)", {
+        "time": _c("s", "event time"),
+        "bearing_deg": _c("deg", "true bearing of the arrival"),
+        "elevation_deg": _c("deg", "elevation of the arrival", False),
+        "sigma_deg": _c("deg", "1-sigma of the bearing", False),
+        "tdoa_rms_s": _c("s", "RMS of the TDOA residuals", False),
+        "n_used": _c("", "channel pairs used", False),
+    }),
+    Kind("range_doppler", "ping and beam near contacts", {
+        "time": _c("s", "ping time", False),
+        "ping": _c("", "ping index"),
+        "cone_deg": _c("deg", "beam cone angle"),
+        "level_db": _c("dB", "matched-filter output, (n, n_range_rate, n_range)"),
+    }, {"range_m": _c("m", "range axis"), "range_rate_mps": _c("m/s", "range-rate axis")}),
+    Kind("contacts", "CFAR contact of one ping", {
+        "time": _c("s", "echo time"),
+        "ping": _c("", "ping index"),
+        "range_m": _c("m", "range (bistatic path / 2)"),
+        "cone_deg": _c("deg", "cone angle"),
+        "bearing_port_deg": _c("deg", "true bearing if to port"),
+        "bearing_stbd_deg": _c("deg", "true bearing if to starboard"),
+        "range_rate_mps": _c("m/s", "range rate, positive opening"),
+        "absolute_doppler_mps": _c("m/s", "range rate with ownship motion removed (eq. 4.9)"),
+        "snr_db": _c("dB", "peak over the CFAR threshold's noise estimate"),
+        "moving": _c("", "|absolute Doppler| above the threshold"),
+        "waveform": _c("", "transmitted waveform name"),
+        "cells": _c("", "range-Doppler cells computed for the ping", False),
+    }),
+    Kind("nb_tracks", "narrowband EKF output sample", {
+        "time": _c("s", "sample time"),
+        "cone_deg": _c("deg", "cone angle estimate"),
+        "freq_hz": _c("Hz", "frequency estimate"),
+        "sigma_cone_deg": _c("deg", "1-sigma of the cone angle"),
+        "sigma_freq_hz": _c("Hz", "1-sigma of the frequency"),
+        "filter": _c("", "which of the two staggered filters"),
+    }),
+    Kind("tracks", "track point", {
+        "time": _c("s", "time of the estimate"),
+        "track_id": _c("", "track number"),
+        "x": _c("m", "east"), "y": _c("m", "north"),
+        "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
+        "cov": _c("m², m²/s²", "state covariance, (n, 4, 4)"),
+        "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
+        "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
+        "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
+    }),
+    Kind("tma", "batch solution", {
+        "t0": _c("s", "window start (reference time of the state)"),
+        "t1": _c("s", "window end"),
+        "method": _c("", "bearings, delays or compact"),
+        "x": _c("m", "east"), "y": _c("m", "north"),
+        "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
+        "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)"),
+        "crlb": _c("m², m²/s²", "Cramér-Rao bound, (n, 4, 4)"),
+        "cost": _c("", "negative log-likelihood at the solution"),
+        "fim_cond": _c("", "condition number of the Fisher information (eq. 3.54)"),
+        "heading_deg": _c("deg", "target course"),
+        "speed_mps": _c("m/s", "target speed"),
+        "range_sigma_m": _c("m", "range standard deviation from the CRLB (eq. 3.55)", False),
+        "cost_mirror": _c("", "cost of the mirrored side hypothesis", False),
+    }),
+]
+
+KINDS: dict[str, Kind] = {k.name: k for k in _KINDS}
+
+
+def kind(name: str) -> Kind:
+    """The declared kind ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Product kind, e.g. ``"bearings"``.
+
+    Returns
+    -------
+    Kind
+
+    Raises
+    ------
+    FormatError
+        When the kind is not declared.
+    """
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise FormatError(f"unknown product kind {name!r} (known: "
+                          f"{', '.join(sorted(KINDS))})") from None
+
+
+def check_columns(kind_name: str, names: set[str] | list[str], where: str = "") -> None:
+    """Raise FormatError if a dataset name is not declared for the kind.
+
+    Parameters
+    ----------
+    kind_name : str
+        Product kind.
+    names : iterable of str
+        Dataset names to be written.
+    where : str
+        Group name for the message.
+    """
+    k = kind(kind_name)
+    extra = sorted(set(names) - k.names())
+    if extra:
+        raise FormatError(f"{where or kind_name}: column(s) {', '.join(extra)} are not declared "
+                          f"for kind {kind_name!r} (arrayproc.io.schema)")
+
+
+def check_group(name: str, group: Mapping[str, Any], path: str = "") -> None:
+    """Raise FormatError if a read group misses a required column of its kind.
+
+    Parameters
+    ----------
+    name : str
+        Group name.
+    group : mapping
+        The group as read (``kind`` and its datasets).
+    path : str
+        File, for the message.
+    """
+    k = KINDS.get(str(group.get("kind", "")))
+    if k is None:
+        return  # a kind written by a newer version: described, not interpreted
+    missing = [c for c in k.required() if c not in group]
+    n_rows = {group[c].shape[0] for c in k.columns if c in group
+              and getattr(group[c], "ndim", 0) >= 1}
+    if missing and any(n > 0 for n in n_rows):
+        raise FormatError(f"{path}: group {name!r} (kind {k.name!r}) lacks column(s) "
+                          f"{', '.join(missing)}")
+
+
+def groups_of_kind(groups: Mapping[str, Mapping[str, Any]], kind_name: str) -> list[str]:
+    """Names of the groups of one kind in a products file read by ``read_products``.
+
+    Parameters
+    ----------
+    groups : mapping
+        ``{name: group}`` as returned by :func:`arrayproc.io.products.read_products`.
+    kind_name : str
+        Product kind.
+
+    Returns
+    -------
+    list of str
+    """
+    return [n for n, g in groups.items() if n != "/" and g.get("kind") == kind_name]
