@@ -237,3 +237,115 @@ def windowed_peaks(r, lo, hi, k, frac):
         for q in range(n_found, k):
             out[i, q] = out[i, 0]
     return out, count
+
+
+#: Half-width (samples) of the windowed-sinc interpolator of :func:`sinc_refine`.
+SINC_HALF = 16
+
+
+_D = np.arange(-SINC_HALF + 1, SINC_HALF + 1)
+#: cos and sin of the window's angular step times each tap offset, for angle addition
+_WC1 = np.cos(np.pi / SINC_HALF * _D)
+_WS1 = np.sin(np.pi / SINC_HALF * _D)
+_WC2 = np.cos(2 * np.pi / SINC_HALF * _D)
+_WS2 = np.sin(2 * np.pi / SINC_HALF * _D)
+
+
+@njit(cache=True, fastmath=True)
+def _sinc_derivs(row, x, half):
+    """r(x), r'(x), r''(x) of a sampled correlation row at fractional index x, interpolated
+    with a Blackman-windowed sinc of ``half`` samples each side (derivatives in samples).
+
+    The sines of π(x − j) alternate in sign with j and the window's cosines follow from angle
+    addition with tabulated tap offsets, so an evaluation needs six transcendental calls.
+    """
+    j0 = int(math.floor(x))
+    f = x - j0
+    pk = math.pi / half
+    sf = math.sin(math.pi * f)
+    cf = math.cos(math.pi * f)
+    c1f = math.cos(pk * f)
+    s1f = math.sin(pk * f)
+    c2f = math.cos(2.0 * pk * f)
+    s2f = math.sin(2.0 * pk * f)
+    r = 0.0
+    r1 = 0.0
+    r2 = 0.0
+    for q in range(2 * half):
+        d = q - half + 1  # j = j0 + d, u = f − d
+        j = j0 + d
+        if j < 0 or j >= row.shape[0]:
+            continue
+        u = f - d
+        pu = math.pi * u
+        sign = 1.0 if d % 2 == 0 else -1.0
+        sn = sign * sf  # sin(π(f − d))
+        cs = sign * cf
+        if abs(u) < 1e-6:
+            sv = 1.0 - pu * pu / 6.0
+            s1 = -math.pi * pu / 3.0
+            s2 = -math.pi * math.pi / 3.0
+        else:
+            sv = sn / pu
+            s1 = cs / u - sn / (pu * u)
+            s2 = -math.pi * sn / u - 2.0 * cs / (u * u) + 2.0 * sn / (pu * u * u)
+        # cos(pk(f − d)) = cos(pk f) cos(pk d) + sin(pk f) sin(pk d)
+        c1 = c1f * _WC1[q] + s1f * _WS1[q]
+        sn1 = s1f * _WC1[q] - c1f * _WS1[q]
+        c2 = c2f * _WC2[q] + s2f * _WS2[q]
+        sn2 = s2f * _WC2[q] - c2f * _WS2[q]
+        w = 0.42 + 0.5 * c1 + 0.08 * c2
+        w1 = -0.5 * pk * sn1 - 0.16 * pk * sn2
+        w2 = -0.5 * pk * pk * c1 - 0.32 * pk * pk * c2
+        v = row[j]
+        r += v * sv * w
+        r1 += v * (s1 * w + sv * w1)
+        r2 += v * (s2 * w + 2.0 * s1 * w1 + sv * w2)
+    return r, r1, r2
+
+
+@njit(cache=True)
+def sinc_refine(r, rows, x0, lo, hi, n_iter, tol):
+    """Newton search for the maximum of windowed-sinc interpolated correlation rows.
+
+    Parameters
+    ----------
+    r : (m_rows, n_lags) float
+        Sampled correlation rows.
+    rows : (m,) int64
+        Row of each search.
+    x0, lo, hi : (m,) float64
+        Start and bounds, fractional sample indices into the rows.
+    n_iter : int
+        Most Newton steps.
+    tol : float
+        Steps shorter than this (samples) end the search.
+
+    Returns
+    -------
+    x, rv, r2v : (m,) float64
+        Index of the maximum, the interpolated value and second derivative (per sample²).
+    """
+    m = x0.shape[0]
+    xs = np.empty(m)
+    rv = np.empty(m)
+    r2v = np.empty(m)
+    for i in range(m):
+        row = r[rows[i]]
+        t = x0[i]
+        v, v1, v2 = _sinc_derivs(row, t, SINC_HALF)
+        for _ in range(n_iter):
+            if v2 >= 0.0:
+                break
+            step = -v1 / v2
+            tn = min(max(t + step, lo[i]), hi[i])
+            vn, v1n, v2n = _sinc_derivs(row, tn, SINC_HALF)
+            if vn < v:
+                break
+            t, v, v1, v2 = tn, vn, v1n, v2n
+            if abs(step) < tol:
+                break
+        xs[i] = t
+        rv[i] = v
+        r2v[i] = v2
+    return xs, rv, r2v
