@@ -5,6 +5,8 @@ file, the table and the key, in one line.
 
 from __future__ import annotations
 
+import math
+import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -14,7 +16,7 @@ import numpy as np
 from arrayproc.errors import ConfigError
 
 try:  # Python 3.11+
-    import tomllib  # noqa: F401  (re-exported for the loaders)
+    import tomllib
 except ModuleNotFoundError:  # pragma: no cover
     pass  # type: ignore[no-redef]
 
@@ -82,3 +84,185 @@ class Param:
 def positive(v: Any) -> str | None:
     """Check for :class:`Param`: the value must be > 0."""
     return None if v > 0 else f"must be > 0, got {v}"
+
+
+def read_toml(path: str | os.PathLike, what: str) -> tuple[dict[str, Any], str]:
+    """Read a TOML file, with the same one-line errors for every kind of configuration.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    what : str
+        What it is (``"chain"``, ``"scenario"``, ``"tracker"``, ...), for the messages.
+
+    Returns
+    -------
+    (dict, str)
+        The parsed document and its text.
+
+    Raises
+    ------
+    ConfigError
+        Missing, unreadable, not UTF-8 or not TOML.
+    """
+    try:
+        with open(path, "rb") as f:
+            raw = f.read()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such {what} file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a directory, not a {what} file") from None
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot read {what} file ({e.strerror})") from None
+    try:
+        text = raw.decode()
+        return tomllib.loads(text), text
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+        raise ConfigError(f"{path}: invalid TOML ({e})") from None
+
+
+class Table:
+    """A TOML table being read with typed getters (scenarios, trackers, TMA and batch files).
+
+    Every getter names the file, the table and the key in its error; :meth:`done` reports the
+    first key that no getter asked for (a typo). Chain stages declare their keys with
+    :class:`Param` instead, checked the same way by :class:`arrayproc.chain.Stage`.
+    """
+
+    def __init__(self, data: Any, where: str, file: str) -> None:
+        if not isinstance(data, dict):
+            raise ConfigError(f"{file}: [{where}] must be a table")
+        self.d = data
+        self.where = where
+        self.file = file
+        self.used: set[str] = set()
+
+    def err(self, key: str, msg: str) -> ConfigError:
+        return ConfigError(f"{self.file}: [{self.where}] {key}: {msg}")
+
+    def has(self, key: str) -> bool:
+        return key in self.d
+
+    def raw(self, key: str, default: Any = None) -> Any:
+        self.used.add(key)
+        return self.d.get(key, default)
+
+    def num(self, key: str, default: float | None = None, *, required: bool = False,
+            positive: bool = False, nonneg: bool = False) -> float | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a number is required)")
+            return default
+        v = self.d[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.err(key, f"must be a number, got {type(v).__name__} {v!r}")
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.err(key, "must be finite")
+        if positive and v <= 0:
+            raise self.err(key, f"must be > 0, got {v}")
+        if nonneg and v < 0:
+            raise self.err(key, f"must be >= 0, got {v}")
+        return v
+
+    def int_(self, key: str, default: int | None = None, *, required: bool = False,
+             minimum: int | None = None) -> int | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (an integer is required)")
+            return default
+        v = self.d[key]
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.err(key, f"must be an integer, got {type(v).__name__} {v!r}")
+        if minimum is not None and v < minimum:
+            raise self.err(key, f"must be >= {minimum}, got {v}")
+        return int(v)
+
+    def str_(self, key: str, default: str | None = None, *, required: bool = False,
+             choices: tuple[str, ...] | None = None) -> str | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a string is required)")
+            return default
+        v = self.d[key]
+        if not isinstance(v, str):
+            raise self.err(key, f"must be a string, got {type(v).__name__} {v!r}")
+        if choices is not None and v not in choices:
+            raise self.err(key, f"must be one of {', '.join(choices)}, got {v!r}")
+        return v
+
+    def bool_(self, key: str, default: bool) -> bool:
+        self.used.add(key)
+        if key not in self.d:
+            return default
+        v = self.d[key]
+        if not isinstance(v, bool):
+            raise self.err(key, f"must be true or false, got {v!r}")
+        return v
+
+    def vec(self, key: str, n: int | None = None, default: Any = None, *,
+            required: bool = False) -> np.ndarray | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, "missing (a list of numbers is required)")
+            return None if default is None else np.asarray(default, float)
+        v = self.d[key]
+        ok = isinstance(v, list) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+        if not ok or (n is not None and len(v) != n):
+            what = f"{n} numbers" if n is not None else "a list of numbers"
+            raise self.err(key, f"must be {what}, got {v!r}")
+        a = np.asarray(v, dtype=float)
+        if not np.all(np.isfinite(a)):
+            raise self.err(key, "must be finite")
+        return a
+
+    def matrix(self, key: str, ncol: int, *, required: bool = False) -> np.ndarray | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise self.err(key, f"missing (a list of [{ncol} numbers] rows is required)")
+            return None
+        v = self.d[key]
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            a = None
+        if (a is None or a.ndim != 2 or a.shape[1] != ncol or a.shape[0] == 0
+                or any(isinstance(x, bool) for row in v for x in row)):
+            raise self.err(key, f"must be a list of rows of {ncol} numbers, got {v!r}")
+        if not np.all(np.isfinite(a)):
+            raise self.err(key, "must be finite")
+        return a
+
+    def sub(self, key: str, required: bool = False) -> Table | None:
+        self.used.add(key)
+        if key not in self.d:
+            if required:
+                raise ConfigError(f"{self.file}: [{self._child(key)}] is missing")
+            return None
+        return Table(self.d[key], self._child(key), self.file)
+
+    def subs(self, key: str) -> list[Table]:
+        """An array of tables (``[[where.key]]``), possibly empty."""
+        self.used.add(key)
+        v = self.d.get(key, [])
+        if isinstance(v, dict):
+            v = [v]
+        if not isinstance(v, list):
+            raise self.err(key, "must be an array of tables")
+        return [Table(x, f"{self._child(key)}[{i}]", self.file) for i, x in enumerate(v)]
+
+    def _child(self, key: str) -> str:
+        return f"{self.where}.{key}" if self.where else key
+
+    def done(self) -> None:
+        unknown = sorted(set(self.d) - self.used)
+        if unknown:
+            where = f"[{self.where}]" if self.where else "top level"
+            raise ConfigError(f"{self.file}: {where}: unknown key {unknown[0]!r}")

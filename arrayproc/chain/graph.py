@@ -12,7 +12,7 @@ from typing import Any
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
-from arrayproc.config import Param, positive, tomllib
+from arrayproc.config import Param, positive, read_toml, tomllib
 from arrayproc.errors import ConfigError
 
 
@@ -99,18 +99,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
 
 def load_chain(path: str) -> ChainSpec:
     """Read and validate a chain TOML file."""
-    try:
-        with open(path, "rb") as f:
-            raw = f.read()
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such chain file") from None
-    except OSError as e:
-        raise ConfigError(f"{path}: cannot read chain file ({e.strerror})") from None
-    try:
-        text = raw.decode()
-        cfg = tomllib.loads(text)
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
-        raise ConfigError(f"{path}: invalid TOML ({e})") from None
+    cfg, text = read_toml(path, "chain")
     try:
         return build_chain(cfg, text)
     except ConfigError as e:

@@ -7,7 +7,6 @@ Every user mistake (unknown key, wrong type, missing key, impossible value) rais
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -15,159 +14,14 @@ from typing import Any
 
 import numpy as np
 
+from arrayproc.config import Table as _Table
+from arrayproc.config import read_toml
 from arrayproc.dsp.fracdelay import PASSBAND
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
 from arrayproc.io.geometry import line_array
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
 SPEED_MODEL_REF = 5.14  # m/s (10 kn), SPL paper eq. (12)
-
-
-# -- small typed readers -------------------------------------------------------------------
-class _Table:
-    """A TOML table being read: tracks used keys so unknown ones can be reported."""
-
-    def __init__(self, data: Any, where: str, file: str) -> None:
-        if not isinstance(data, dict):
-            raise ConfigError(f"{file}: [{where}] must be a table")
-        self.d = data
-        self.where = where
-        self.file = file
-        self.used: set[str] = set()
-
-    def err(self, key: str, msg: str) -> ConfigError:
-        return ConfigError(f"{self.file}: [{self.where}] {key}: {msg}")
-
-    def has(self, key: str) -> bool:
-        return key in self.d
-
-    def raw(self, key: str, default: Any = None) -> Any:
-        self.used.add(key)
-        return self.d.get(key, default)
-
-    def num(self, key: str, default: float | None = None, *, required: bool = False,
-            positive: bool = False, nonneg: bool = False) -> float | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a number is required)")
-            return default
-        v = self.d[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.err(key, f"must be a number, got {type(v).__name__} {v!r}")
-        v = float(v)
-        if not math.isfinite(v):
-            raise self.err(key, "must be finite")
-        if positive and v <= 0:
-            raise self.err(key, f"must be > 0, got {v}")
-        if nonneg and v < 0:
-            raise self.err(key, f"must be >= 0, got {v}")
-        return v
-
-    def int_(self, key: str, default: int | None = None, *, required: bool = False,
-             minimum: int | None = None) -> int | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (an integer is required)")
-            return default
-        v = self.d[key]
-        if isinstance(v, bool) or not isinstance(v, int):
-            raise self.err(key, f"must be an integer, got {type(v).__name__} {v!r}")
-        if minimum is not None and v < minimum:
-            raise self.err(key, f"must be >= {minimum}, got {v}")
-        return int(v)
-
-    def str_(self, key: str, default: str | None = None, *, required: bool = False,
-             choices: tuple[str, ...] | None = None) -> str | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a string is required)")
-            return default
-        v = self.d[key]
-        if not isinstance(v, str):
-            raise self.err(key, f"must be a string, got {type(v).__name__} {v!r}")
-        if choices is not None and v not in choices:
-            raise self.err(key, f"must be one of {', '.join(choices)}, got {v!r}")
-        return v
-
-    def bool_(self, key: str, default: bool) -> bool:
-        self.used.add(key)
-        if key not in self.d:
-            return default
-        v = self.d[key]
-        if not isinstance(v, bool):
-            raise self.err(key, f"must be true or false, got {v!r}")
-        return v
-
-    def vec(self, key: str, n: int | None = None, default: Any = None, *,
-            required: bool = False) -> np.ndarray | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a list of numbers is required)")
-            return None if default is None else np.asarray(default, float)
-        v = self.d[key]
-        ok = isinstance(v, list) and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
-        if not ok or (n is not None and len(v) != n):
-            what = f"{n} numbers" if n is not None else "a list of numbers"
-            raise self.err(key, f"must be {what}, got {v!r}")
-        a = np.asarray(v, dtype=float)
-        if not np.all(np.isfinite(a)):
-            raise self.err(key, "must be finite")
-        return a
-
-    def matrix(self, key: str, ncol: int, *, required: bool = False) -> np.ndarray | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, f"missing (a list of [{ncol} numbers] rows is required)")
-            return None
-        v = self.d[key]
-        try:
-            a = np.asarray(v, dtype=float)
-        except (TypeError, ValueError):
-            a = None
-        if (a is None or a.ndim != 2 or a.shape[1] != ncol or a.shape[0] == 0
-                or any(isinstance(x, bool) for row in v for x in row)):
-            raise self.err(key, f"must be a list of rows of {ncol} numbers, got {v!r}")
-        if not np.all(np.isfinite(a)):
-            raise self.err(key, "must be finite")
-        return a
-
-    def sub(self, key: str, required: bool = False) -> _Table | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise ConfigError(f"{self.file}: [{self._child(key)}] is missing")
-            return None
-        return _Table(self.d[key], self._child(key), self.file)
-
-    def subs(self, key: str) -> list[_Table]:
-        """An array of tables (``[[where.key]]``), possibly empty."""
-        self.used.add(key)
-        v = self.d.get(key, [])
-        if isinstance(v, dict):
-            v = [v]
-        if not isinstance(v, list):
-            raise self.err(key, "must be an array of tables")
-        return [_Table(x, f"{self._child(key)}[{i}]", self.file) for i, x in enumerate(v)]
-
-    def _child(self, key: str) -> str:
-        return f"{self.where}.{key}" if self.where else key
-
-    def done(self) -> None:
-        unknown = sorted(set(self.d) - self.used)
-        if unknown:
-            where = f"[{self.where}]" if self.where else "top level"
-            raise ConfigError(f"{self.file}: {where}: unknown key {unknown[0]!r}")
 
 
 def _speed(t: _Table, required: bool = True) -> float | None:
@@ -365,14 +219,7 @@ def _broadband(t: _Table | None, fs: float) -> Broadband | None:
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file."""
     p = Path(path)
-    if not p.exists():
-        raise ConfigError(f"{p}: no such scenario file")
-    try:
-        data = tomllib.loads(p.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{p}: not valid TOML ({e})") from None
-    except OSError as e:
-        raise ConfigError(f"{p}: cannot read ({e})") from None
+    data, _ = read_toml(p, "scenario")
     return parse_scenario(data, str(p), base_dir=p.parent)
 
 
