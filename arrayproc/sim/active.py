@@ -20,7 +20,7 @@ import numpy as np
 from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
 from arrayproc.sim._propagate_kernels import echo_accumulate
 from arrayproc.sim.motion import BodyOffsetMover, FixedMover, TrackMover
-from arrayproc.sim.propagation import LossLaw, Pose, forward_time, grid_nodes, retarded_time
+from arrayproc.sim.propagation import LossLaw, PoseTrack, forward_time, grid_nodes, retarded_time
 from arrayproc.sim.scenario import ActiveSpec
 from arrayproc.sim.sources import tonal_amplitude
 
@@ -170,7 +170,26 @@ class ActiveSim:
             "f1": wf.f1, "bits": int(wf.sequence.size), "taper": wf.taper,
             "level_db": self.spec.level_db, "offset": self.spec.offset}
 
-    def render(self, out: np.ndarray, k0: int, t: np.ndarray, pose: Pose,
+    def recording_active(self) -> tuple:
+        """Arguments of :meth:`arrayproc.io.recording.RecordingWriter.set_active`: the ping
+        schedule and the replica as a real sonar recording carries them (DESIGN section 4),
+        the replica sampled at the recording's rate (unit peak, the transmitted taper)."""
+        wf = self.spec.waveform
+        if wf.kind == "hfm":
+            fc, bw = 0.5 * (wf.f0 + wf.f1), abs(wf.f1 - wf.f0)
+        else:
+            fc, bw = wf.fc, wf.bandwidth
+        attrs = {"kind": wf.kind, "fc": float(fc), "bandwidth": float(bw),
+                 "duration": float(wf.duration), "taper": float(wf.taper)}
+        if wf.kind == "bpsk":
+            attrs["bits"] = int(wf.sequence.size)
+        if wf.kind == "hfm":
+            attrs.update(f0=float(wf.f0), f1=float(wf.f1))
+        rep = wf(np.arange(int(np.ceil(wf.duration * self.fs)) + 1) / self.fs)
+        return (self.ping_times.astype(float), np.zeros(self.ping_times.size, np.int64),
+                {wf.kind: (rep, attrs)}, np.asarray(self.spec.offset, float))
+
+    def render(self, out: np.ndarray, k0: int, t: np.ndarray, pose: PoseTrack,
                body: np.ndarray) -> None:
         """Add every echo overlapping the chunk (samples k0 …, times ``t``) to ``out``."""
         if self.windows["ping"].size == 0 or t.size == 0:

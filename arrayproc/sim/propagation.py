@@ -20,7 +20,7 @@ GRID = 32  # samples between exact reference retarded times
 
 
 @dataclass
-class Pose:
+class PoseTrack:
     """Array pose at sample times: reference (x, y) (n, 2), depth (n,), sin/cos of heading,
     lateral offset (n,) of every element (m, starboard)."""
 

@@ -19,7 +19,7 @@ from arrayproc.sim._propagate_kernels import oneway_accumulate
 from arrayproc.sim.active import ActiveSim, PingTrain
 from arrayproc.sim.motion import BodyOffsetMover, TrackMover
 from arrayproc.sim.noise import ambient_noise
-from arrayproc.sim.propagation import LossLaw, Pose, grid_nodes, retarded_time
+from arrayproc.sim.propagation import LossLaw, PoseTrack, grid_nodes, retarded_time
 from arrayproc.sim.scenario import Scenario, load_scenario
 from arrayproc.sim.sources import SourceSignal
 
@@ -104,12 +104,12 @@ class Simulator:
                           "the array (near field of the elements)")
 
     # -- pose ------------------------------------------------------------------------------
-    def pose(self, t: np.ndarray) -> Pose:
+    def pose(self, t: np.ndarray) -> PoseTrack:
         """The array's pose at times t (s)."""
         p, _, _, crs, _ = self.own.evaluate(t)
         h = np.deg2rad(crs)
         idx = np.clip((t / self.s.array.lateral_snapshot).astype(np.int64), 0, self.n_snap - 1)
-        return Pose(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
+        return PoseTrack(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
                     np.sin(h), np.cos(h), np.ascontiguousarray(self.lateral_offsets[idx]))
 
     def element_positions(self, t: float) -> np.ndarray:
@@ -239,6 +239,8 @@ def simulate(scen: Scenario, out_path: str | Path, progress: bool = False,
                 if bar is not None:
                     bar.update(k1 - k0)
             w.set_nav(*sim.nav())
+            if sim.active is not None:
+                w.set_active(*sim.active.recording_active())
             groups, gattrs = sim.truth()
             _write_truth(w, groups, gattrs)
     finally:

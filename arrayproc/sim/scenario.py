@@ -21,8 +21,6 @@ from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
 from arrayproc.io.geometry import line_array
 
-SPEED_MODEL_REF = 5.14  # m/s (10 kn), SPL paper eq. (12)
-
 
 def _speed(t: _Table, required: bool = True) -> float | None:
     """``speed`` (m/s) or ``speed_kn`` (knots)."""
@@ -182,6 +180,26 @@ def tetrahedron(side: float) -> np.ndarray:
     return np.vstack([base, [[0.0, 0.0, -0.75 * h]]])
 
 
+#: Largest source level accepted, dB re 1 µPa @ 1 m: far above any real source (about 270 dB
+#: for the loudest explosions), low enough that 10^(L/20) stays finite in float64.
+MAX_LEVEL_DB = 300.0
+
+
+def _level(t: _Table, key: str, default: float | None = None, required: bool = False
+           ) -> float | None:
+    v = t.num(key, default, required=required)
+    if v is not None and abs(v) > MAX_LEVEL_DB:
+        raise t.err(key, f"{v:g} dB is not a physical level (|level| <= {MAX_LEVEL_DB:g} dB)")
+    return v
+
+
+def _check_speed(t: _Table, traj: Trajectory, c: float) -> None:
+    """A platform moves slower than sound (the simulator's retarded-time solver needs it)."""
+    fastest = max((seg.speed for seg in traj.segments), default=0.0)
+    if fastest >= c:
+        raise t.err("speed", f"{fastest:g} m/s is not below the sound speed {c:g} m/s")
+
+
 def _tonals(t: _Table, fs: float) -> list[Tonal]:
     out = []
     raw = t.raw("tonals", [])
@@ -193,7 +211,7 @@ def _tonals(t: _Table, fs: float) -> list[Tonal]:
         if f > PASSBAND * fs:
             raise tt.err("freq", f"{f} Hz is above the simulator's band "
                          f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-        out.append(Tonal(f, tt.num("level_db", required=True), tt.num("phase_deg", None)))
+        out.append(Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None)))
         tt.done()
     return out
 
@@ -208,7 +226,7 @@ def _broadband(t: _Table | None, fs: float) -> Broadband | None:
         raise t.err("band", f"upper edge {band[1]} Hz is above the simulator's band "
                     f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
     model = t.str_("model", "flat", choices=("flat", "speed"))
-    level = t.num("level_db", None, required=(model == "flat"))
+    level = _level(t, "level_db", None, required=(model == "flat"))
     if model == "speed" and level is not None:
         raise t.err("level_db", "not used with model = \"speed\" (the level follows the speed)")
     slope = t.num("slope_db_per_octave", 0.0)
@@ -266,6 +284,7 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         own, own_static = Trajectory.static((0.0, 0.0), 0.0), True
     else:
         own, own_static = _trajectory(ot)
+        _check_speed(ot, own, c)
         ot.done()
 
     # sources
@@ -275,8 +294,12 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         name = st.str_("name", f"source{i}")
         if name in names or name in ("ownship", "towship"):
             raise st.err("name", f"duplicate or reserved source name {name!r}")
+        if not name or "/" in name or name in (".", ".."):
+            raise st.err("name", f"{name!r} must be a plain name (not empty, no '/', not '.' "
+                         "or '..'): it names the source's /truth group")
         names.add(name)
         traj, _ = _trajectory(st)
+        _check_speed(st, traj, c)
         depth = st.num("depth", 0.0)
         tonals = _tonals(st, fs)
         bb = _broadband(st.sub("broadband"), fs)
@@ -370,6 +393,9 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
     by_name = {s.name: s for s in sources}
     for i, tt in enumerate(t.subs("target")):
         name = tt.str_("name", f"target{i}")
+        if not name or "/" in name or name in (".", ".."):
+            raise tt.err("name", f"{name!r} must be a plain name (not empty, no '/', not '.' "
+                         "or '..')")
         src = tt.str_("source", None)
         if src is not None:
             if src not in by_name:

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from arrayproc.acoustics.source_level import ROSS_SURFACE_SHIP
 from arrayproc.sim.motion import TrackMover
-from arrayproc.sim.scenario import SPEED_MODEL_REF, Broadband, SourceSpec
+from arrayproc.sim.scenario import Broadband, SourceSpec
 from arrayproc.sim.signals import UPA2, ShapedNoise
 
 KEY_TONAL = 11
@@ -29,12 +30,6 @@ LEVEL_GRID = 256  # source samples between evaluations of the speed-dependent le
 def tonal_amplitude(level_db: float) -> float:
     """Peak amplitude (Pa at 1 m) of a tonal of RMS level ``level_db`` dB re 1 µPa @ 1 m."""
     return float(np.sqrt(2.0) * 1e-6 * 10 ** (level_db / 20.0))
-
-
-def speed_source_level(speed: np.ndarray | float) -> np.ndarray:
-    """Broadband source level (dB re 1 µPa @ 1 m) from speed (m/s), SPL paper eq. (12)."""
-    v = np.maximum(np.asarray(speed, dtype=float), 1e-6)
-    return 170.0 + 53.0 * np.log10(v / SPEED_MODEL_REF)
 
 
 def band_shape(bb: Broadband):
@@ -89,7 +84,7 @@ class SourceSignal:
         if bb.model == "flat":
             return np.full(t.shape, bb.level_db)
         v = np.hypot(*self.mover.state3(t)[1][:, :2].T)
-        return speed_source_level(v) - 10 * np.log10(self.bandwidth)
+        return ROSS_SURFACE_SHIP(v) - 10 * np.log10(self.bandwidth)
 
     def block(self, m0: int, m1: int) -> np.ndarray:
         """Samples m0 … m1−1 (float64, Pa at 1 m)."""
