@@ -24,14 +24,16 @@ TWO_PI = 2.0 * math.pi
 
 @njit(cache=True, nogil=True)
 def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float, speed: float,
-             x: np.ndarray, c: float, fc: float, rinv: np.ndarray, q: np.ndarray,
+             x: np.ndarray, c: float, mix0: float, mix_step: float, rinv: np.ndarray,
+             q: np.ndarray,
              state: np.ndarray, cov: np.ndarray, out: np.ndarray,
              uniform: bool = False) -> None:
     """Run the EKF over ``T`` samples, updating ``state`` (θ rad, f Hz) and ``cov`` (2, 2) in
     place and writing ``out[k] = (θ, f, P_θθ, P_ff)`` after each sample's update.
 
     ``yr``/``yi``: (T, N) real and imaginary parts (``yi`` unused when ``cplx`` is False);
-    sample k is at ``τ = tau0 + k dt`` s since the filter's (re)initialisation; ``rinv`` (N,)
+    sample k is at ``τ = tau0 + k dt`` s since the filter's (re)initialisation and has the
+    mixing phase ``mix0 + k mix_step`` rad (complex input); ``rinv`` (N,)
     inverse noise variance of each real measurement component; ``q`` (2,) process noise
     variance per second of θ (rad²/s) and f (Hz²/s). ``uniform``: the elements are equally
     spaced in ``x`` order, so the element phasors follow from the first by a constant rotation
@@ -59,7 +61,7 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
         if uniform:
             ps0 = wf * (tau + x[0] * ct / c)
             if cplx:
-                ps0 -= TWO_PI * fc * tau
+                ps0 -= mix0 + k * mix_step
             zr = math.cos(ps0)
             zi = math.sin(ps0)
             dph = wf * (x[1] - x[0]) * ct / c if n > 1 else 0.0
@@ -74,7 +76,7 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
                 sn = zi
                 zr, zi = zr * rr - zi * ri, zr * ri + zi * rr
             elif cplx:
-                ps = wf * s - TWO_PI * fc * tau
+                ps = wf * s - (mix0 + k * mix_step)
                 cs = math.cos(ps)
                 sn = math.sin(ps)
             else:

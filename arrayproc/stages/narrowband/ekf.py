@@ -10,6 +10,16 @@ ripple follows). With ``dual``, a second filter restarts half a period later and
 taken from the filter that has run longer since its last restart, i.e. the one out of its
 start-up ripple (fig. 3.6, right).
 
+Phase alignment (``align_phase``, default on; off is the thesis's re-initialisation): the state
+has no phase, so a filter started with time origin "now" sees the tonal's phase offset as a
+frequency error φ0 / (2π τ) that decays as 1/τ (the start-up ripple), and at high SNR the first
+large updates can throw the cone onto a sidelobe. With alignment, the time origin of a
+re-initialised filter is moved by less than one period 1/f_D so that its model phase equals
+that of the filter it is re-initialised from (which is locked to the data); the first start
+takes the phase from the data (the element samples correlated with the model's phasors over
+the first ``ALIGN_S`` seconds). The model and the state are the thesis's; only the time origin
+changes.
+
 Amplitude: per input block, the tonal power A² and the noise power are split with the array
 (:mod:`.amplitude`) at the current estimate, smoothed over ``amp_tau_s`` seconds, and the
 samples are divided by A before the update; the EKF's measurement variance is then the noise
@@ -25,6 +35,10 @@ import numpy as np
 
 from arrayproc.stages.narrowband import _kernels
 from arrayproc.stages.narrowband.amplitude import analytic, split_power
+from arrayproc.stages.narrowband.model import phase
+
+#: Span of the first samples whose phase aligns the first start, s.
+ALIGN_S = 0.1
 
 
 @dataclass
@@ -41,7 +55,8 @@ class NarrowbandEKF:
     Parameters
     ----------
     x : (N,) ndarray
-        Element positions along the body x axis, m (forward positive).
+        Element positions along the body x axis, m (forward positive); the cone is that of
+        the plane wave at the array centre.
     cone_deg, freq_hz : float
         Initial cone angle (deg, 0 forward end-fire) and tonal frequency (Hz, without own
         Doppler).
@@ -62,13 +77,20 @@ class NarrowbandEKF:
         Run two filters staggered by half a period (thesis fig. 3.6).
     amp_tau_s : float
         Smoothing time constant of the amplitude/noise estimates, s.
+    align_phase : bool
+        Choose each (re)start's time origin so that the model phase matches (see the module
+        docstring); False re-initialises with the origin at the restart time (the thesis).
     """
 
     def __init__(self, x: np.ndarray, cone_deg: float, freq_hz: float, sound_speed: float,
                  fc: float | None = None, p0: tuple[float, float] = (2.0, 0.5),
                  q: tuple[float, float] = (0.05, 0.01), noise: float | None = None,
-                 reinit_s: float = 30.0, dual: bool = True, amp_tau_s: float = 5.0) -> None:
-        self.x = np.ascontiguousarray(x, float)
+                 reinit_s: float = 30.0, dual: bool = True, amp_tau_s: float = 5.0,
+                 align_phase: bool = True) -> None:
+        # positions from the array centre: the model's common phase then refers to the centre,
+        # where a cone error adds no phase (any reference is a constant phase for eq. (3.21))
+        x = np.asarray(x, float)
+        self.x = np.ascontiguousarray(x - 0.5 * (x.min() + x.max()))
         d = np.diff(self.x)
         self.uniform = bool(d.size == 0 or np.allclose(d, d[0], rtol=1e-9, atol=1e-12))
         self.c = float(sound_speed)
@@ -79,6 +101,7 @@ class NarrowbandEKF:
         self.reinit_s = float(reinit_s)
         self.dual = bool(dual)
         self.amp_tau_s = float(amp_tau_s)
+        self.align_phase = bool(align_phase)
         self._x0 = np.array([math.radians(cone_deg), float(freq_hz)])
         self._filters: list[_Filter] | None = None
         self._a2: float | None = None
@@ -89,6 +112,26 @@ class NarrowbandEKF:
         if self.dual:
             self._filters.append(_Filter(self._x0.copy(), self.p0.copy(), t,
                                          t + 0.5 * self.reinit_s))
+
+    def _align_start(self, y: np.ndarray, t0: float, fs: float, speed: float) -> None:
+        """Move the first start's time origin so that the model phase matches the data."""
+        n = max(1, min(y.shape[0], int(round(ALIGN_S * fs))))
+        th, f = self._x0
+        tau = np.arange(n) / fs
+        ph = np.stack([phase(th, f, tk, self.x, speed, self.c) for tk in tau])
+        if self.fc is not None:
+            ph = ph - self._mix(t0, fs, n)[:, None]
+            r = np.sum(y[:n] * np.exp(-1j * ph))
+        else:  # analytic of sin Φ is −j e^{jΦ}
+            r = np.sum(1j * analytic(y)[:n] * np.exp(-1j * ph))
+        fd = f * (1.0 + speed * math.cos(th) / self.c)
+        shift = (np.angle(r) / (2.0 * np.pi)) % 1.0 / fd
+        for flt in self._filters:
+            flt.origin = t0 - shift
+
+    def _mix(self, t0: float, fs: float, n: int) -> np.ndarray:
+        """Mixing phase 2π fc t (rad) of n samples from t0 (reduced modulo one cycle)."""
+        return 2.0 * np.pi * np.mod(self.fc * (t0 + np.arange(n) / fs), 1.0)
 
     def _active(self) -> int:
         """Index of the filter that has run longest since its last restart."""
@@ -140,8 +183,11 @@ class NarrowbandEKF:
             ``filter`` (index of the filter giving the output), ``amplitude`` (input units).
         """
         n_t = y.shape[0]
-        if self._filters is None:
+        first = self._filters is None
+        if first:
             self._start(t0)
+            if self.align_phase:
+                self._align_start(y, t0, fs, speed)
         a2, s2 = self._amplitude(y, speed, n_t / fs)
         amp = math.sqrt(a2)
         cplx = np.iscomplexobj(y)
@@ -152,6 +198,7 @@ class NarrowbandEKF:
         rinv = np.full(self.x.size, 1.0 / max(r, 1e-12))
         fc = float(self.fc or 0.0)
         dt = 1.0 / fs
+        mix_step = 2.0 * math.pi * fc * dt
         res = np.empty((n_t, 4))
         which = np.empty(n_t, np.int8)
         outs = [np.empty((n_t, 4)) for _ in self._filters]
@@ -160,10 +207,11 @@ class NarrowbandEKF:
             t_k = t0 + k * dt
             nxt = min(f.next_reinit for f in self._filters)
             k1 = min(n_t, max(k + 1, int(math.ceil((nxt - t0) * fs - 1e-9))))
+            mix0 = 2.0 * math.pi * math.fmod(fc * t_k, 1.0)
             for f, o in zip(self._filters, outs):
                 _kernels.ekf_span(yr[k:k1], yi[k:k1] if cplx else yi, cplx, t_k - f.origin,
-                                  dt, speed, self.x, self.c, fc, rinv, self.q, f.state, f.cov,
-                                  o[k:k1], self.uniform)
+                                  dt, speed, self.x, self.c, mix0, mix_step, rinv, self.q,
+                                  f.state, f.cov, o[k:k1], self.uniform)
             i = self._active()
             res[k:k1] = outs[i][k:k1]
             which[k:k1] = i
@@ -174,7 +222,11 @@ class NarrowbandEKF:
                     src = self._filters[self._active_excluding(j)]
                     f.state = src.state.copy()
                     f.cov = self.p0.copy()
-                    f.origin = t_next
+                    if self.align_phase:  # same model phase as src, origin within 1/f_D
+                        fd = src.state[1] * (1.0 + speed * math.cos(src.state[0]) / self.c)
+                        f.origin = t_next - math.fmod(t_next - src.origin, 1.0 / fd)
+                    else:
+                        f.origin = t_next
                     f.next_reinit += self.reinit_s
         return {"time": t0 + np.arange(n_t) * dt, "cone_deg": np.degrees(res[:, 0]),
                 "freq_hz": res[:, 1], "sigma_cone_deg": np.degrees(np.sqrt(res[:, 2])),

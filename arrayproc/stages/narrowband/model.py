@@ -13,9 +13,11 @@ hear it) from cone angle ``θ`` (rad, 0 forward end-fire). With ``τ`` the time 
 
 Real input (thesis eq. (3.21)): ``h_n = sin Φ_n``. Complex baseband input (the
 ``dft_filter`` stage's ``complex = true`` output, mixed down by ``fc``): ``h_n = exp(j Ψ_n)``
-with ``Ψ_n = Φ_n − 2π fc τ``, used as the 2 N_H real measurements (Re, Im). Constant phase
-offsets (the absolute time origin, the mixing phase) are not in the state; the filter absorbs
-them through its frequency estimate, which is the start-up "ripple" of thesis fig. 3.6.
+with ``Ψ_n = Φ_n − ψ``, ``ψ = 2π fc t`` the mixing phase at the sample's absolute time t, used
+as the 2 N_H real measurements (Re, Im). The tonal's phase is not in the state: a phase offset
+at the filter's start is absorbed by the frequency estimate (f̂ − f ≈ φ0 / (2π τ)), which is
+the start-up "ripple" of thesis fig. 3.6, unless the start time origin is chosen so that the
+model's phase matches (``align_phase`` in :mod:`.ekf`).
 
 Jacobian (thesis eq. (3.23) for the frequency column)::
 
@@ -69,24 +71,25 @@ def phase_gradient(theta: float, f: float, tau: float, x: np.ndarray, speed: flo
 
 
 def measurement(theta: float, f: float, tau: float, x: np.ndarray, speed: float, c: float,
-                fc: float | None = None) -> np.ndarray:
+                mix: float | None = None) -> np.ndarray:
     """Predicted measurement: ``sin Φ`` (N,) for real input (thesis eq. (3.21)), or
-    ``exp(j(Φ − 2π fc τ))`` (N,) complex for baseband input when ``fc`` is given (Hz)."""
+    ``exp(j(Φ − ψ))`` (N,) complex for baseband input when the mixing phase ``mix`` = ψ (rad)
+    is given."""
     ph = phase(theta, f, tau, x, speed, c)
-    if fc is None:
+    if mix is None:
         return np.sin(ph)
-    return np.exp(1j * (ph - 2.0 * np.pi * fc * tau))
+    return np.exp(1j * (ph - mix))
 
 
 def jacobian(theta: float, f: float, tau: float, x: np.ndarray, speed: float, c: float,
-             fc: float | None = None) -> np.ndarray:
+             mix: float | None = None) -> np.ndarray:
     """Jacobian of :func:`measurement` w.r.t. (θ rad, f Hz): (N, 2) real for real input,
-    (N, 2) complex (∂Re + j ∂Im) for baseband input."""
+    (N, 2) complex (∂Re + j ∂Im) for baseband input (mixing phase ``mix``, rad)."""
     ph = phase(theta, f, tau, x, speed, c)
     g = phase_gradient(theta, f, tau, x, speed, c)
-    if fc is None:
+    if mix is None:
         return np.cos(ph)[:, None] * g
-    return 1j * np.exp(1j * (ph - 2.0 * np.pi * fc * tau))[:, None] * g
+    return 1j * np.exp(1j * (ph - mix))[:, None] * g
 
 
 def reflect_cone(theta: float) -> float:

@@ -75,11 +75,16 @@ class NarrowbandEKFStage(Stage):
         "dual": Param("bool", True, "two filters re-initialised half a period apart"),
         "output_rate": Param("float", 10.0, "rows per second written to nb_tracks, Hz",
                              check=positive),
+        "align_phase": Param("bool", True, "start each (re)initialised filter with its model "
+                             "phase matched (false: the thesis's re-initialisation)"),
         "baseline": Param("bool", False, "also write the per-sample CBF baseline (thesis "
                           "3.2.1.1) as nb_tracks group '<name>_cbf' (filter = -1)"),
     }
 
     def validate(self) -> None:
+        # the key 'output_rate' would shadow Stage.output_rate(fs) (the rate of the series
+        # passed on, unchanged here): keep the value under another name
+        self.row_rate = float(self.__dict__.pop("output_rate"))
         self._ekf: NarrowbandEKF | None = None
         self._last_slot = -1.0
         self._cbf_last_slot = -1.0
@@ -114,7 +119,7 @@ class NarrowbandEKFStage(Stage):
             x, cone, freq, c, fc=fc, p0=(self.p0_cone_deg, self.p0_freq_hz),
             q=(self.sigma_cone_deg, self.sigma_freq_hz),
             noise=None if self.noise == "auto" else float(self.noise),
-            reinit_s=self.reinit_s, dual=self.dual)
+            reinit_s=self.reinit_s, dual=self.dual, align_phase=self.align_phase)
 
     def _track(self, y: np.ndarray, b: Block, x: np.ndarray, speed: float, out,
                cbf_out=None) -> None:
@@ -123,7 +128,7 @@ class NarrowbandEKFStage(Stage):
         s0 = int(b.meta.sample0)
         r = self._ekf.process(y, s0 / b.fs, b.fs, speed)
         # one row at the first sample at or after each multiple of 1 / output_rate
-        slot = np.floor((s0 + np.arange(y.shape[0])) * (self.output_rate / b.fs) + 1e-9)
+        slot = np.floor((s0 + np.arange(y.shape[0])) * (self.row_rate / b.fs) + 1e-9)
         prev = np.concatenate([[self._last_slot], slot[:-1]])
         keep = slot != prev
         self._last_slot = slot[-1] if slot.size else self._last_slot
@@ -152,7 +157,7 @@ class NarrowbandEKFStage(Stage):
         r = cbf_track(yy, b0.fs, self._x(last), c, fc=fc, band=tuple(band) if band else None,
                       coarse_s=BASELINE_WINDOW_S)
         s0 = int(b0.meta.sample0)
-        slot = np.floor((s0 + np.arange(yy.shape[0])) * (self.output_rate / b0.fs) + 1e-9)
+        slot = np.floor((s0 + np.arange(yy.shape[0])) * (self.row_rate / b0.fs) + 1e-9)
         keep = slot != np.concatenate([[self._cbf_last_slot], slot[:-1]])
         self._cbf_last_slot = slot[-1]
         speed = float(last.pose.speed) if last.pose is not None else 0.0

@@ -10,19 +10,22 @@ from arrayproc.stages.narrowband.model import jacobian, measurement, reflect_con
 
 
 def ekf_reference(y: np.ndarray, tau0: float, dt: float, speed: float, x: np.ndarray, c: float,
-                  fc: float | None, r: np.ndarray, q: np.ndarray, state: np.ndarray,
-                  cov: np.ndarray) -> np.ndarray:
-    """Run the gain-form EKF over y (T, N); returns (T, 4) rows (θ, f, P_θθ, P_ff)."""
+                  mix0: float | None, mix_step: float, r: np.ndarray, q: np.ndarray,
+                  state: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """Run the gain-form EKF over y (T, N) (complex when ``mix0``, the first sample's mixing
+    phase in rad, is given; ``mix_step`` rad per sample); returns (T, 4) rows
+    (θ, f, P_θθ, P_ff)."""
     st = np.array(state, float)
     p = np.array(cov, float)
     out = np.empty((y.shape[0], 4))
-    cplx = fc is not None
+    cplx = mix0 is not None
     rr = np.concatenate([r, r]) if cplx else np.asarray(r, float)
     for k in range(y.shape[0]):
         tau = tau0 + k * dt
         p = p + np.diag(q) * dt
-        h = measurement(st[0], st[1], tau, x, speed, c, fc)
-        hj = jacobian(st[0], st[1], tau, x, speed, c, fc)
+        mix = mix0 + k * mix_step if cplx else None
+        h = measurement(st[0], st[1], tau, x, speed, c, mix)
+        hj = jacobian(st[0], st[1], tau, x, speed, c, mix)
         if cplx:
             h = np.concatenate([h.real, h.imag])
             hj = np.concatenate([hj.real, hj.imag])

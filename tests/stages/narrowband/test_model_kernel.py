@@ -24,16 +24,16 @@ X = line(16, 0.36)
        tau=st.floats(0.0, 60.0), speed=st.floats(0.0, 8.0),
        cplx=st.booleans())
 def test_jacobian_matches_finite_differences(th, f, tau, speed, cplx):
-    fc = 690.0 if cplx else None
-    jac = jacobian(th, f, tau, X, speed, C, fc)
+    mix = 1.3 if cplx else None
+    jac = jacobian(th, f, tau, X, speed, C, mix)
     # central differences, steps scaled so the phase moves by ~1e-3 rad
     gmax = np.abs(phase_gradient(th, f, tau, X, speed, C)).max(axis=0)
     for i, g in enumerate(gmax):
         h = 1e-3 / max(g, 1.0)
         d = np.zeros(2)
         d[i] = h
-        fd = (measurement(th + d[0], f + d[1], tau, X, speed, C, fc)
-              - measurement(th - d[0], f - d[1], tau, X, speed, C, fc)) / (2 * h)
+        fd = (measurement(th + d[0], f + d[1], tau, X, speed, C, mix)
+              - measurement(th - d[0], f - d[1], tau, X, speed, C, mix)) / (2 * h)
         scale = max(g, 1.0)
         assert np.max(np.abs(fd - jac[:, i])) <= 1e-5 * scale
 
@@ -59,11 +59,13 @@ def test_kernel_matches_numpy_reference(cplx, uniform):
     q = np.array([math.radians(0.05) ** 2, 0.01 ** 2])
     x0 = np.array([math.radians(64.0), 697.1])
     p0 = np.diag([math.radians(2.0) ** 2, 0.5 ** 2])
-    ref = ekf_reference(y, 0.2, 1 / fs, 2.5, x, C, fc, r, q, x0, p0)
+    mix0 = 2 * np.pi * np.fmod(697.5 * t[0], 1.0) if cplx else None
+    mix_step = 2 * np.pi * 697.5 / fs
+    ref = ekf_reference(y, 0.2, 1 / fs, 2.5, x, C, mix0, mix_step, r, q, x0, p0)
     state, cov, out = x0.copy(), p0.copy(), np.empty((t.size, 4))
     yi = np.ascontiguousarray(y.imag) if cplx else np.zeros((1, 1))
     _kernels.ekf_span(np.ascontiguousarray(y.real), yi, cplx, 0.2, 1 / fs, 2.5, x, C,
-                      fc or 0.0, 1 / r, q, state, cov, out, uniform)
+                      mix0 or 0.0, mix_step, 1 / r, q, state, cov, out, uniform)
     np.testing.assert_allclose(out[:, :2], ref[:, :2], rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(out[:, 2:], ref[:, 2:], rtol=1e-6)
     np.testing.assert_allclose(state, ref[-1, :2], rtol=1e-9)
@@ -77,6 +79,7 @@ def test_kernel_reflects_cone_at_end_fire():
     state = np.array([math.radians(1.0), 697.0])
     cov = np.diag([math.radians(5.0) ** 2, 0.1 ** 2])
     out = np.empty((t.size, 4))
-    _kernels.ekf_span(y.real.copy(), y.imag.copy(), True, 0.0, 1 / fs, 0.0, X, C, fc,
-                      np.full(X.size, 10.0), np.array([1e-6, 1e-6]), state, cov, out)
+    _kernels.ekf_span(y.real.copy(), y.imag.copy(), True, 0.0, 1 / fs, 0.0, X, C, 0.0,
+                      2 * np.pi * fc / fs, np.full(X.size, 10.0), np.array([1e-6, 1e-6]),
+                      state, cov, out)
     assert np.all((out[:, 0] >= 0) & (out[:, 0] <= math.pi))
