@@ -176,9 +176,23 @@ def _attr_str(v: Any) -> str:
 
 
 def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
-    """Every group of a products file as ``{name: {"kind", "stage", "attrs", dataset: array}}``.
+    """Every group of a products file, its columns checked against :mod:`arrayproc.io.schema`.
 
-    Root attributes are under the key ``"/"``.
+    Parameters
+    ----------
+    path : str or path-like
+        Products file.
+
+    Returns
+    -------
+    dict
+        ``{name: {"kind", "stage", "attrs", dataset: array}}``; the root attributes are under
+        the key ``"/"``.
+
+    Raises
+    ------
+    FormatError
+        Not a products file, or a group lacks a required column of its kind.
     """
     with open_h5(path, "products file") as f:
         fmt = f.attrs.get("format", "")

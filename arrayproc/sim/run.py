@@ -254,8 +254,25 @@ def simulate_file(scenario_path: str | Path, out_path: str | Path, seed: int | N
                   warn: Callable[[str], None] | None = None) -> Path:
     """``arrayproc simulate``: read and validate the scenario, then stream the recording.
 
-    ``seed`` overrides ``[recording] seed``; ``duration`` (s) overrides the scenario's
-    duration (meant to shorten it for a quick look).
+    Parameters
+    ----------
+    scenario_path : str or Path
+        Scenario TOML (docs/formats.md).
+    out_path : str or Path
+        Recording to write (atomically: nothing is left if the run fails).
+    seed : int, optional
+        Overrides ``[recording] seed``; the same seed gives the same bytes.
+    duration : float, optional
+        Overrides the scenario's duration, s (to shorten it for a quick look).
+    progress : bool
+        Show a progress bar on stderr.
+    warn : callable, optional
+        Receives warnings as one line each.
+
+    Returns
+    -------
+    Path
+        The recording written.
     """
     scen = load_scenario(scenario_path)
     if seed is not None:
