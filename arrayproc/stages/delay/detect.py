@@ -5,10 +5,11 @@ sum of the periodogram over the band's bins). The background B_k is the median o
 window of ``background`` seconds centred on frame k (clipped at the stream's ends), so a frame
 is decided ``background/2`` seconds after it arrives and memory is bounded by that window. A
 frame is active when E_k − B_k ≥ ``threshold_db``; active runs closer than ``merge_gap`` are
-merged, runs shorter than ``min_duration`` dropped and runs longer than ``max_duration`` cut.
-Each event reports its time box, SNR (the largest E_k − B_k), and its band: the bins whose
-event-mean level exceeds their background median by at least 3 dB and by no less than 10 dB
-below the largest excess. No library detects transients this
+merged, runs whose frames span less than ``min_duration`` dropped and runs longer than
+``max_duration`` cut. Each event reports its time box (from the start of its first active frame
+to the end of its last), SNR (the largest E_k − B_k), and its band: the bins whose event-mean
+level exceeds their background median by at least 3 dB and by no less than 10 dB below the
+largest excess. No library detects transients this
 way in a stream; written by hand on numpy.
 """
 
@@ -62,7 +63,7 @@ class TransientDetector:
         self.f = f[self.bins]
         self.win = np.hanning(self.nfft)
         self.threshold_db = float(threshold_db)
-        self.min_frames = max(1, int(np.ceil(min_duration * fs / self.hop)))
+        self.min_duration = float(min_duration)
         self.gap_frames = max(1, int(np.ceil(merge_gap * fs / self.hop)))
         self.max_frames = max(1, int(max_duration * fs / self.hop))
         self.half = max(1, int(round(background / 2 * fs / self.hop)))
@@ -72,9 +73,6 @@ class TransientDetector:
         self._frames: deque[tuple[int, float, np.ndarray]] = deque()  # (k, E dB, spectrum dB)
         self._k_decide = 0
         self._open: list | None = None  # [k_first, k_last_active, snr, spec_sum, bg_spec, n]
-
-    def _t(self, k: int) -> float:
-        return (k * self.hop + self.nfft / 2) / self.fs
 
     def push(self, x: np.ndarray, final: bool = False) -> list[Event]:
         """Add the next samples of the channel; return the events closed so far."""
@@ -129,14 +127,14 @@ class TransientDetector:
     def _close(self) -> list[Event]:
         k0, k1, snr, ssum, bg_spec, n = self._open
         self._open = None
-        if k1 - k0 + 1 < self.min_frames:
+        t0 = k0 * self.hop / self.fs  # the active frames' span
+        t1 = (k1 * self.hop + self.nfft) / self.fs
+        if t1 - t0 < self.min_duration:
             return []
         lvl = 10 * np.log10(np.maximum(ssum / n, 1e-300)) - bg_spec
         hot = np.flatnonzero(lvl >= max(3.0, float(lvl.max()) - 10.0))
         lo, hi = (self.f[hot[0]], self.f[hot[-1]]) if hot.size else (self.f[0], self.f[-1])
-        half = self.hop / 2 / self.fs
-        return [Event(self._t(k0) - half, self._t(k1) + half, float(lo), float(hi),
-                      float(snr))]
+        return [Event(t0, t1, float(lo), float(hi), float(snr))]
 
 
 def detect_transients(x: np.ndarray, fs: float, band: tuple[float, float],

@@ -7,9 +7,10 @@ position minimises the whitened residuals
 
     ‖ L⁻¹ (τ − τ(s)) ‖²,   C = L Lᵀ,
 
-solved by ``scipy.optimize.least_squares`` from several starts: along the plane-wave direction
-of the event (a linear least-squares fit of τ = −(p_i − p_ref)·u/c) at ranges 0.5-30 m, and along
-its opposite, inside a box of ±``max_range`` around the array. The covariance is the inverse
+solved by ``scipy.optimize.least_squares`` from several starts: of eight points along the
+plane-wave direction of the event (a linear least-squares fit of τ = −(p_i − p_ref)·u/c) and its
+opposite at ranges 0.5-30 m, the ``n_starts`` of lowest cost, inside a box of ±``max_range``
+around the array. The covariance is the inverse
 Fisher information at the solution, (Jᵀ J)⁻¹ = (Hᵀ C⁻¹ H)⁻¹ (thesis eq. (C.8)), optionally scaled
 by the fit (``cov_scale = "fit"``: by χ²/dof; ``"inflate"``: by max(1, χ²/dof)).
 
@@ -50,6 +51,8 @@ class LocaliseConfig:
         Half-size of the search box around the array centre, m.
     sigma_floor : float
         Added in quadrature to every σ, s (model and timing errors the estimator's σ ignores).
+    n_starts : int
+        The solver runs from this many of the eight starts, those of lowest cost.
     """
 
     min_corr: float = 0.3
@@ -57,6 +60,7 @@ class LocaliseConfig:
     cov_scale: str = "none"
     max_range: float = 100.0
     sigma_floor: float = 0.0
+    n_starts: int = 3
 
 
 @dataclass(frozen=True)
@@ -167,14 +171,18 @@ def localise_event(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray, element
     box = cfg.max_range
     lo, hi = centre - box, centre + box
     u = _direction_lls(tau, el, reference, c, use)
+    starts = np.array([centre + sign * r * u for sign in (1.0, -1.0)
+                       for r in (0.5, 2.0, 8.0, 30.0)])
+    starts = np.clip(starts, lo + 1e-6, hi - 1e-6)
+    # cost of every start at once; the solver runs from the best few
+    pred = tdoa.predicted_delays(starts, el, reference, c)[:, idx]
+    cost0 = np.sum((Linv @ (t_u[None, :] - pred).T) ** 2, axis=0)
     best = None
-    for sign in (1.0, -1.0):
-        for r in (0.5, 2.0, 8.0, 30.0):
-            x0 = np.clip(centre + sign * r * u, lo + 1e-6, hi - 1e-6)
-            sol = least_squares(resid, x0, jac=jac, bounds=(lo, hi), method="trf",
-                                x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12)
-            if best is None or sol.cost < best.cost:
-                best = sol
+    for k in np.argsort(cost0)[:cfg.n_starts]:
+        sol = least_squares(resid, starts[k], jac=jac, bounds=(lo, hi), method="trf",
+                            x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        if best is None or sol.cost < best.cost:
+            best = sol
     s = best.x
     if np.any(np.abs(s - centre) > 0.999 * box):
         return None
