@@ -504,7 +504,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
-def add_to(sub: Any) -> None:
+def add_parser(sub: Any) -> None:
     """Register ``arrayproc batch`` on the CLI's subparsers."""
     s = sub.add_parser("batch", help="run a chain over many recordings (or segments) on Dask")
     s.add_argument("inputs", nargs="+", metavar="INPUT",

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from arrayproc.app import batch
-from arrayproc.app.api import load_chain, run_chain
+from arrayproc.app.api import run_chain
 from arrayproc.chain.segments import plan_segments, warmup_margin
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter
@@ -113,7 +113,7 @@ def client():
 @pytest.fixture(scope="module")
 def recs(tmp_path_factory) -> list[Path]:
     d = tmp_path_factory.mktemp("recs")
-    return [make_recording(d / f"rec{i}.h5", 12.0, i) for i in range(3)]
+    return [make_recording(d / f"rec{i}.h5", 6.0, i) for i in range(3)]
 
 
 @pytest.fixture(scope="module")
@@ -177,11 +177,11 @@ def test_four_segments_equal_the_single_run(tmp_path, client, text, exact):
     the single run bit for bit. dft_filter's overlap-save frames are laid from the first
     sample read, so its output (and everything after it) equals the single run's only to
     float32 rounding: same rows and times, values within 1e-3 dB / 1e-2 deg."""
-    rec = make_recording(tmp_path / "long.h5", 40.0, 7)
+    rec = make_recording(tmp_path / "long.h5", 24.0, 7)
     chain = tmp_path / "c.toml"
     chain.write_text(text)
     ref = single_run(rec, chain.read_text(), tmp_path / "ref.h5")
-    res = batch.run_batch([rec], chain, tmp_path / "seg", client, segment_s=10.0)
+    res = batch.run_batch([rec], chain, tmp_path / "seg", client, segment_s=6.0)
     assert res[0].status == "done" and res[0].segments == 4
     out = tmp_path / "seg" / "long.h5"
     if exact:
@@ -207,7 +207,7 @@ def test_worker_killed_mid_task_and_batch_completes(tmp_path, client, chain_file
     task again and every output is complete and equal to a clean run's."""
     d = tmp_path / "r"
     d.mkdir()
-    recs = [make_recording(d / f"k{i}.h5", 40.0, 10 + i) for i in range(2)]
+    recs = [make_recording(d / f"k{i}.h5", 20.0, 10 + i) for i in range(2)]
     out = tmp_path / "out"
     killed: list[str] = []
 
@@ -303,3 +303,31 @@ def test_without_dask_says_how_to_install(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", fake)
     with pytest.raises(batch.ConfigError, match=r"pip install 'arrayproc\[dask\]'"):
         batch.require_dask()
+
+
+def _draw_mean(n_runs: int, seed: int, scale: float = 1.0) -> np.ndarray:
+    """A stand-in Monte Carlo chunk: per-run means of seeded draws."""
+    return scale * np.random.default_rng(seed).standard_normal((n_runs, 16)).mean(axis=1)
+
+
+def test_monte_carlo_chunks_do_not_depend_on_the_workers(client):
+    """The same chunks and seeds here and on 2 workers: the same bytes."""
+    from arrayproc.evaluate.distributed import chunk_seeds, spread
+    assert [n for n, _ in chunk_seeds(25, 3, 10)] == [10, 10, 5]
+    here = np.concatenate(spread(_draw_mean, 25, 3, None, 10, scale=2.0))
+    there = np.concatenate(spread(_draw_mean, 25, 3, client, 10, scale=2.0))
+    assert here.shape == (25,) and here.tobytes() == there.tobytes()
+    assert not np.array_equal(here, np.concatenate(spread(_draw_mean, 25, 4, None, 10)))
+
+
+@pytest.mark.slow
+def test_lr_table_same_on_two_workers_as_here(client):
+    """The L-R table from chunks on 2 workers equals the one computed here."""
+    from arrayproc.evaluate.distributed import lr_table
+    here = lr_table(40, 7, [1], ["ekf", "ukf"], chunk=10)
+    there = lr_table(40, 7, [1], ["ekf", "ukf"], client=client, chunk=10)
+    for f in ("ekf", "ukf"):
+        for k, v in here[1][f].items():
+            if not k.startswith("seconds"):
+                assert np.array_equal(np.asarray(v), np.asarray(there[1][f][k]),
+                                      equal_nan=True), (f, k)
