@@ -13,7 +13,8 @@ from arrayproc.plots._delay import groups_of
 
 
 @register_plot("delays")
-def plot_delays(path: str, out_png: str, min_corr: float = 0.0) -> None:
+def plot_delays(path: str, out_png: str, min_corr: float = 0.0, range_db: float | None = None,
+                beam: float | None = None, truth: bool = True) -> None:
     """Draw the first ``delays`` group of products file ``path`` into ``out_png``.
 
     Parameters
@@ -24,6 +25,8 @@ def plot_delays(path: str, out_png: str, min_corr: float = 0.0) -> None:
         Output image.
     min_corr : float
         Delays with a lower normalised correlation are drawn hollow.
+    range_db, beam, truth
+        Options of the other plots, unused here.
     """
     import matplotlib.pyplot as plt
 

@@ -13,7 +13,8 @@ from arrayproc.plots._delay import groups_of, source_recording
 
 @register_plot("detections")
 def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: int = 1024,
-                    range_db: float = 50.0, fmax: float | None = None) -> None:
+                    range_db: float = 50.0, fmax: float | None = None,
+                    beam: float | None = None, truth: bool = True) -> None:
     """Draw the spectrogram of ``channel`` (default: the detections' channel) of the recording
     the products file ``path`` was made from, with each detection's box, into ``out_png``.
 
@@ -31,6 +32,8 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
         Colour range below the 99.9th percentile, dB.
     fmax : float, optional
         Highest frequency shown, Hz (default: twice the highest detection band edge).
+    beam, truth
+        Options of the other plots, unused here.
     """
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle

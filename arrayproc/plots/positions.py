@@ -27,7 +27,8 @@ def _elements(root: dict) -> np.ndarray | None:
 
 @register_plot("positions")
 def plot_positions(path: str, out_png: str, span: float | None = None,
-                   n_sigma: float = 1.0) -> None:
+                   n_sigma: float = 1.0, range_db: float | None = None,
+                   beam: float | None = None, truth: bool = True) -> None:
     """Draw the ``positions`` of products file ``path`` into ``out_png``.
 
     Parameters
@@ -41,6 +42,8 @@ def plot_positions(path: str, out_png: str, span: float | None = None,
         events, at least 2 m; the title counts the events outside).
     n_sigma : float
         Size of the error ellipses in standard deviations.
+    range_db, beam, truth
+        Options of the other plots, unused here.
     """
     import matplotlib.pyplot as plt
 
