@@ -328,8 +328,8 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
                 near = (near_src == si) & (dc[si] <= detect_gate_deg)
                 detected[si] = np.bincount(ti[near], minlength=T) > 0
     tid = np.asarray(g["track_id"], np.int64)
-    st = np.array([_str(v) for v in g["status"]]) if "status" in g \
-        else np.full(tid.size, "confirmed")
+    from arrayproc.track.manage.tracks import status_names
+    st = status_names(g["status"]) if "status" in g else np.full(tid.size, "confirmed")
     conf = st == "confirmed"
     tt = np.asarray(g["time"], float)
     ti_rows = np.searchsorted(times, tt)

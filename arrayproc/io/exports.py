@@ -276,7 +276,9 @@ def write_rep(path: str, out: str, origin: tuple[float, float] = (0.0, 0.0),
         tid = np.asarray(g["track_id"], np.int64)
         keep = np.ones(t.size, bool)
         if confirmed_only and "status" in g:
-            keep = np.array([_s(s) == "confirmed" for s in g["status"]])
+            st = np.asarray(g["status"])
+            keep = (st == 1) if st.dtype.kind in "iu" else np.array(
+                [_s(s) == "confirmed" for s in st])  # io.schema code 1: confirmed
         if "own_x" in g:
             ot, idx = np.unique(t, return_index=True)
             ox = np.asarray(g["own_x"], float)[idx]

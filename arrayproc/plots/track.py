@@ -91,7 +91,8 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
         ax.annotate(name, (p[-1, 0] / 1e3, p[-1, 1] / 1e3), color=c, fontsize=9,
                     xytext=(4, -10), textcoords="offset points", fontstyle="italic")
     multi = _s(dict(g.get("attrs") or {}).get("mode", "")) == "multi"
-    status = np.array([_s(v) for v in g["status"]]) if "status" in g else None
+    from arrayproc.track.manage.tracks import status_names
+    status = status_names(g["status"]) if "status" in g else None
     ids = np.unique(g["track_id"])
     cmap = plt.get_cmap("tab10")
     for k, tid in enumerate(ids):

@@ -59,7 +59,7 @@ from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.manage.gaussian import ConstantVelocity, EKFBatch, KalmanBatch
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.manager import TrackManager
-from arrayproc.track.manage.tracks import Status, Track
+from arrayproc.track.manage.tracks import STATUS_CODES, Status, Track, status_names
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -549,7 +549,8 @@ def run_multi(products_path: str, config_path: str, out_path: str,
                 continue
             cols = dict(r)
             cols["track_id"] = np.full(n, tr.id, np.int64)
-            cols["status"] = np.asarray([str(s) for s in cols["status"]], dtype="S9")
+            cols["status"] = np.array([STATUS_CODES[str(s)] for s in cols["status"]],
+                                      np.int8)
             g.append(**cols)
         if not any(r["time"].size for r in rows):
             g.attrs["empty"] = True
@@ -557,10 +558,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
 
 def confirmed_status(status: np.ndarray) -> np.ndarray:
     """Boolean mask of rows whose ``status`` column reads confirmed."""
-    s = np.asarray(status)
-    if s.dtype.kind == "S":
-        return s == Status.CONFIRMED.value.encode()
-    return s.astype(str) == Status.CONFIRMED.value
+    return status_names(status) == Status.CONFIRMED.value
 
 
 __all__ = ["run_multi", "tracker_mode", "split_config", "multi_target", "bearing_scans",

@@ -71,7 +71,8 @@ def test_raven_bearings_and_errors(tmp_path):
         g.append(time=np.array([1.0, 1.0, 3.0]), cone_deg=np.array([30.0, 90.0, 31.0]),
                  bearing_port_deg=np.array([60.0, 0.0, 59.0]),
                  bearing_stbd_deg=np.array([120.0, 180.0, 121.0]),
-                 freq_lo=np.full(3, 60.0), freq_hi=np.full(3, 900.0), snr_db=np.ones(3))
+                 freq_lo=np.full(3, 60.0), freq_hi=np.full(3, 900.0), snr_db=np.ones(3),
+                 level_db=np.full(3, 80.0), spl_db=np.full(3, 90.0))
     out = tmp_path / "b.txt"
     assert write_raven([str(p)], str(out)) == 3
     rows = read_raven(str(out))
@@ -80,7 +81,7 @@ def test_raven_bearings_and_errors(tmp_path):
     assert rows[0]["cone_deg"] != ""
     empty = tmp_path / "e.h5"
     with ProductsWriter(empty, source=rec) as w:
-        w.group("btr", "btr").append(time=np.zeros(1))
+        w.group("btr", "btr").append(time=np.zeros(1), power_db=np.zeros((1, 3)))
     with pytest.raises(FormatError, match="no detections or bearings"):
         write_raven([str(empty)], str(tmp_path / "x.txt"))
     bad = tmp_path / "bad.txt"
@@ -112,7 +113,7 @@ def test_rep_tracks_round_trip(tmp_path):
             g.append(time=t, track_id=np.full(t.size, tid), x=x0 + vx * t, y=y0 + vy * t,
                      vx=np.full(t.size, vx), vy=np.full(t.size, vy),
                      cov=np.tile(np.eye(4), (t.size, 1, 1)),
-                     status=np.array([b"confirmed"] * t.size, "S9"),
+                     status=np.ones(t.size, np.int8),
                      own_x=10.0 * t, own_y=np.zeros(t.size))
     out = tmp_path / "t.rep"
     write_rep(str(trk), str(out), origin=(50.0, -4.0))
@@ -139,7 +140,8 @@ def test_rep_sensor2_round_trip(tmp_path):
         w.group("bearings", "bearings").append(
             time=np.array([2.0, 4.0]), cone_deg=np.array([100.0, 45.0]),
             bearing_port_deg=port, bearing_stbd_deg=stbd, freq_lo=np.array([148.0, 60.0]),
-            freq_hi=np.array([149.0, 900.0]))
+            freq_hi=np.array([149.0, 900.0]), level_db=np.zeros(2), snr_db=np.zeros(2),
+            spl_db=np.zeros(2))
     out = tmp_path / "b.rep"
     write_rep(str(p), str(out))
     lines = [s for s in out.read_text().splitlines() if s.startswith(";SENSOR2:")]

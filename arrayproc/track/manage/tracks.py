@@ -93,4 +93,17 @@ class Track:
         }
 
 
-__all__ = ["Status", "Track", "TrackPoint"]
+#: integer codes of the ``status`` column (io.schema: 0 tentative, 1 confirmed, 2 deleted)
+STATUS_CODES = {Status.TENTATIVE.value: 0, Status.CONFIRMED.value: 1, Status.DELETED.value: 2}
+
+
+def status_names(col: np.ndarray) -> np.ndarray:
+    """A ``status`` column (integer codes, or names as bytes or str) as names (str)."""
+    a = np.asarray(col)
+    if a.dtype.kind in "iu":
+        names = np.array(list(STATUS_CODES), dtype=object)
+        return names[a.astype(np.int64)].astype(str)
+    return np.array([v.decode() if isinstance(v, bytes) else str(v) for v in a.reshape(-1)])
+
+
+__all__ = ["Status", "Track", "TrackPoint", "STATUS_CODES", "status_names"]

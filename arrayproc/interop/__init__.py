@@ -1,0 +1,1 @@
+"""Interoperability with other tracking and analysis packages (optional extras)."""
