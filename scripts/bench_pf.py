@@ -29,7 +29,7 @@ import numpy as np
 
 from arrayproc.acoustics.tl import load_default_table
 from arrayproc.evaluate.scenarios import get_scenario
-from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig, run_seeds
+from arrayproc.track.filters.particle import RegularizedParticleFilter, RPFConfig, run_seeds
 
 
 def stonesoup_run(sc, times, obs, bearings_deg, n, seed):

@@ -22,7 +22,9 @@ from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from arrayproc.evaluate.montecarlo import LRScenario, run_case
 from arrayproc.track.filters import UKF
 from arrayproc.track.init import init_from_bearing
-from arrayproc.track.models import bearing_residual, bearing_sigma_mean, constant_velocity
+from arrayproc.track.models.bearing import Bearing, bearing_residual, bearing_sigma_mean
+from arrayproc.track.models.motion import constant_velocity
+from arrayproc.track.state import Context
 
 
 def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
@@ -31,10 +33,10 @@ def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
     model = constant_velocity()
     pts = MerweScaledSigmaPoints(4, alpha=1.0, beta=0.0, kappa=-1.0)
     R = np.array([[math.radians(scn.sigma_deg) ** 2]])
-    Q = model.process_noise(scn.dt)
+    Q = model.covariance(scn.dt)
 
     def fx(x, dt, o0, o1):
-        return model.transition(x, dt, o0, o1)
+        return model.function(x, dt, Context(o1, o0))
 
     def hx(x):
         return np.array([math.atan2(x[0], x[1])])
@@ -52,16 +54,19 @@ def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
 
 
 def class_runs(scn: LRScenario, y1: np.ndarray) -> float:
-    """Seconds for our per-step UKF class over every row of y1."""
+    """Seconds for our per-step UKF object (predict/update with the bearing model) over every
+    row of y1."""
     g = scn.geometry()
     model = constant_velocity()
+    meas = Bearing(sigma_deg=scn.sigma_deg)
+    ctxs = [Context(g["own"][k], g["own"][k - 1]) for k in range(1, y1.shape[1])]
+    f = UKF()
     t0 = time.perf_counter()
     for r in range(y1.shape[0]):
-        f = UKF(model, scn.sigma_deg)
-        f.initialize(*init_from_bearing(math.degrees(y1[r, 0]), g["own"][0], scn.prior, 4))
+        s = f.initialize(*init_from_bearing(math.degrees(y1[r, 0]), g["own"][0], scn.prior, 4))
         for k in range(1, y1.shape[1]):
-            f.predict(scn.dt, g["own"][k - 1], g["own"][k])
-            f.update(math.degrees(y1[r, k]))
+            s, _ = f.update(f.predict(s, model, scn.dt, ctxs[k - 1]), y1[r, k], meas,
+                            ctxs[k - 1])
     return time.perf_counter() - t0
 
 

@@ -26,7 +26,7 @@ import numpy as np
 from arrayproc.evaluate import montecarlo as mc
 from arrayproc.track.filters import make_filter
 from arrayproc.track.init import TrackPrior
-from arrayproc.track.models import Q1_PAPER, Q2_PAPER, make_model
+from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 PARAMS = {"ghf": {"gh_order": 3}, "srf": {"likelihood": "exact"}}
@@ -77,15 +77,13 @@ def run_known(case: int, name: str, runs: int, seed: int = 2024, q1: float = Q1_
             meas = scenario.measurements(runs, seed + case)
     g = scenario.geometry()
     model = make_model(scenario.model_name, q1, q2)
-    filt = make_filter(name, model, sig_filt, **PARAMS.get(name, {}))
+    filt = make_filter(name, **PARAMS.get(name, {}))
     y1, _, draws, rel = meas
-    kind, *pts = filt.kernel_args()
     prior = scenario.prior.as_array()
     prior[4] = math.radians(sig_filt)
-    est, _, status = mc._run_threads(kind, model.code, np.ascontiguousarray(y1[..., None]),
-                                     g["times"], g["own"], filt.sigma, model.q1, model.q2,
-                                     prior, np.ascontiguousarray(draws), tuple(pts),
-                                     model.dim, 1)
+    est, _, status = mc._run_threads(filt, model, np.ascontiguousarray(y1[..., None]),
+                                     g["times"], g["own"], math.radians(sig_filt), prior,
+                                     np.ascontiguousarray(draws), 1)
     truth = rel[..., :4]
     r_est = np.hypot(est[:, -1, 0], est[:, -1, 1])
     r_true = np.hypot(truth[:, -1, 0], truth[:, -1, 1])

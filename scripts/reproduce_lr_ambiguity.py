@@ -25,9 +25,11 @@ import numpy as np
 
 from arrayproc.evaluate.montecarlo import LRScenario, pcrb_case1, run_case, warm_up
 from arrayproc.track.filters import make_filter
-from arrayproc.track.init import init_from_bearing
-from arrayproc.track.lr import LRResolver
-from arrayproc.track.models import make_model
+from arrayproc.track.init import initial_state
+from arrayproc.track.manage.lr import LRResolver
+from arrayproc.track.models.bearing import Bearing
+from arrayproc.track.models.motion import make_model
+from arrayproc.track.state import Context
 
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 # L-R paper table I: track loss % (known side, resolved) and relative execution time.
@@ -42,26 +44,26 @@ PAPER = {
 
 
 def example_run(scn: LRScenario, name: str, params: dict, seed: int) -> dict[str, np.ndarray]:
-    """One run through the per-step classes and :class:`LRResolver` (fig. 4)."""
+    """One run through the filter objects and :class:`LRResolver` (fig. 4)."""
     g = scn.geometry()
     y1, y2, draws, rel = scn.measurements(1, seed)
     model = make_model(scn.model_name)
+    meas = Bearing(sigma_deg=scn.sigma_deg)
+    filt = make_filter(name, **params)
     prior = scn.prior
-    n = model.dim
+    n = model.ndim
 
     def fresh(z0):
-        f = make_filter(name, model, scn.sigma_deg, **params)
-        x0, P0 = init_from_bearing(math.degrees(z0), g["own"][0], prior, n)
+        x0, P0 = initial_state(z0, g["own"][0], prior, n)
         # the same initial draw as the Monte Carlo kernel
         c = z0 + math.pi + draws[0, 2]
         x0[0], x0[1] = draws[0, 0] * math.sin(z0), draws[0, 0] * math.cos(z0)
         x0[2] = draws[0, 1] * math.sin(c) - g["own"][0, 2]
         x0[3] = draws[0, 1] * math.cos(c) - g["own"][0, 3]
-        f.initialize(x0, P0)
-        return f
+        return filt.initialize(x0, P0)
 
     known = fresh(y1[0, 0])
-    lr = LRResolver([fresh(y1[0, 0]), fresh(y2[0, 0])])
+    lr = LRResolver(filt, model, meas, [fresh(y1[0, 0]), fresh(y2[0, 0])])
     K = g["times"].size
     est_k = np.empty((K, n))
     est_r = np.empty((K, n))
@@ -70,14 +72,14 @@ def example_run(scn: LRScenario, name: str, params: dict, seed: int) -> dict[str
     for k in range(K):
         if k > 0:
             T = g["times"][k] - g["times"][k - 1]
-            known.predict(T, g["own"][k - 1], g["own"][k])
-            known.update(math.degrees(y1[0, k]))
-            lr.step(T, g["own"][k - 1], g["own"][k],
-                    [math.degrees(y1[0, k]), math.degrees(y2[0, k])])
+            ctx = Context(g["own"][k], g["own"][k - 1])
+            known, _ = filt.update(filt.predict(known, model, T, ctx), y1[0, k], meas, ctx)
+            lr.step(T, ctx, [y1[0, k], y2[0, k]])
         est_k[k] = known.x
-        est_r[k] = lr.estimate()[0]
-        ghost[k] = lr.filters[1].x
-        w[k] = lr.weights[0]
+        x, _, wk = lr.combine()
+        est_r[k] = x
+        ghost[k] = lr.states[1].x
+        w[k] = wk[0]
     own = g["own"][:, :2]
     return {"own": own, "truth": rel[0, :, :2] + own, "known": est_k[:, :2] + own,
             "resolved": est_r[:, :2] + own, "ghost": ghost[:, :2] + own, "w": w,

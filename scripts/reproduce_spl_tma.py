@@ -25,7 +25,7 @@ from arrayproc.acoustics.tl import load_default_table
 from arrayproc.evaluate.scenarios import get_scenario
 from arrayproc.plots.rmse import plot_rmse_curves, plot_scenario_geometry
 from arrayproc.track.crlb import position_rmse_bound
-from arrayproc.track.pf import RegularizedParticleFilter, RPFConfig, run_seeds
+from arrayproc.track.filters.particle import RegularizedParticleFilter, RPFConfig, run_seeds
 
 #: Published values: (time_min, BOT m, BOT+SPL m); None where the paper gives no number.
 PAPER = {
