@@ -162,6 +162,13 @@ _KINDS = [
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
+        # multi-target mode (track/multi.py)
+        "cone_deg": _c("deg", "cone angle of a bearing track's cone filter", False),
+        "sigma_cone_deg": _c("deg", "1-sigma of cone_deg", False),
+        "row": _c("", "measurement row used (index in its products group; -1 coasted)",
+                  False),
+        "z": _c("m", "depth (positions tracks)", False),
+        "vz": _c("m/s", "depth rate (positions tracks)", False),
     }),
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),
