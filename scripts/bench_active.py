@@ -56,6 +56,8 @@ class MemRecording:
     def n_channels_file(self) -> int:
         return self.x.shape[1]
 
+    n_channels = n_channels_file
+
     def read(self, start: int, stop: int, dtype=np.float32) -> np.ndarray:
         return np.asarray(self.x[start:stop], dtype)
 

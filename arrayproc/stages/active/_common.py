@@ -12,9 +12,6 @@ from arrayproc.errors import ConfigError
 
 from .bank import DOPPLER_INSENSITIVE
 
-BEAM_DOMAIN = ("beam", "time")
-PLANE_DOMAIN = ("beam", "range_rate", "range")
-CONTACT_DOMAIN = ("contact",)
 DOPPLER_MARGIN_MPS = 15.0  # band widening for the Doppler of the default band
 
 

@@ -5,9 +5,11 @@ Per beam of each ``matched_filter`` block the square-law plane (range-rate chann
 through the CFAR of :mod:`arrayproc.stages.active.cfar` (CA, GO, SO or OS; 1-D along range when
 the Doppler ``guard``/``train`` are 0, else 2-D over range x Doppler; threshold from ``pfa`` by
 the closed forms). Adjacent cells form one cluster, whose peak lag and range rate are
-interpolated. At the end of a ping, clusters from all beams are merged (one echo shows on
-several beams: greedy non-maximum suppression within ``merge_range_m`` and ``merge_cone_deg``)
-and written as ``contacts`` rows:
+interpolated. At the end of a ping, clusters from all beams are merged
+(one echo shows on several beams, through the array's main lobe, side lobes and, above the
+design frequency, grating lobes: greedy non-maximum suppression on the peak power, within
+``merge_range_m`` of bistatic path / 2 and ``merge_cone_deg``) and written as ``contacts``
+rows:
 
 - ``time``: echo reception time t_p + tau, s; ``ping``; ``waveform`` (name, bytes);
 - ``range_m``: from the bistatic path c tau and the projector offset
@@ -20,8 +22,9 @@ and written as ``contacts`` rows:
 
 A Doppler-insensitive ping's contacts carry range rate 0 and absolute Doppler U cos(cone)
 (not a measurement; ``moving`` is false). Each ping's contacts are also posted for a
-``matched_filter`` stage in bracket mode. Blocks out: one per ping, domain ``("contact",)``,
-``meta["contacts"]`` the ping's rows.
+``matched_filter`` stage in bracket mode. Blocks out: one per ping, domain ``CONTACTS``, with
+the ping's PingMeta whose ``extra["contacts"]`` holds the rows and ``extra["cells"]`` the
+cells the matched filter computed for the ping (also the ``cells`` column).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from arrayproc.chain import Block, Param, Stage, register
+from arrayproc.chain.domains import Domain, PingMeta
 from arrayproc.errors import ConfigError
 
 from . import _common as cm
@@ -57,6 +61,8 @@ class Cfar(Stage):
     """CFAR, clustering and contacts (see module doc)."""
 
     kind = "cfar"
+    accepts = frozenset({Domain.RANGE_DOPPLER})
+    produces = Domain.CONTACTS
     params = {
         "method": Param("str", "ca", "CFAR: ca, go, so or os", choices=("ca", "go", "so", "os")),
         "pfa": Param("float", 1e-6, "design false-alarm probability per cell"),
@@ -67,7 +73,8 @@ class Cfar(Stage):
         "moving_threshold": Param("float", 2.0, "|absolute Doppler| above which a contact is "
                                   "moving, knots"),
         "merge_range_m": Param("float", 0.0, "merge gate in range, m (0: 4 range cells c/(2B))"),
-        "merge_cone_deg": Param("float", 15.0, "merge gate in cone angle, deg"),
+        "merge_cone_deg": Param("float", 180.0, "merge gate in cone angle, deg (180: any "
+                                "beam, which also folds grating and side lobes)"),
         "threads": Param("int", 0, "threads over the beams of a block (0: all cores)"),
     }
 
@@ -92,7 +99,8 @@ class Cfar(Stage):
         cells = 0
         try:
             for b in blocks:
-                m = b.meta
+                pm = b.meta
+                m = pm.extra
                 planes = [b.data[j] for j in range(b.data.shape[0])]
                 res = list(pool.map(self._beam, planes)) if pool else list(map(self._beam,
                                                                                planes))
@@ -101,43 +109,47 @@ class Cfar(Stage):
                     for cl in cls:
                         rate = float(np.interp(cl.row, np.arange(rr.size), rr))
                         cand.append((m["cones"][j], (cl.col + m["lag0"]) / m["fs_bb"], rate,
-                                     10 * np.log10(cl.peak / cl.noise)))
+                                     10 * np.log10(cl.peak / cl.noise), cl.peak))
                 cells += int(m["cells"])
                 if m["last"]:
                     rows = self._finish(b, cand, cells)
                     if out is not None and rows["time"].size:
                         out.append(**rows)
-                    cm.post(self.ctx, self.name, m["ping"], m["kind"], rows)
-                    yield Block(np.zeros(rows["time"].size), cm.CONTACT_DOMAIN, b.t0, b.span,
-                                b.fs, b.positions, pose=b.pose, index=b.index,
-                                meta={"ping": m["ping"], "contacts": rows, "cells": cells,
-                                      "waveform": m["waveform"]})
+                    cm.post(self.ctx, self.name, pm.ping, m["kind"], rows)
+                    meta = PingMeta(pm.ping, pm.waveform, pm.t_ping, pm.fc, pm.speed,
+                                    pm.heading, pm.projector,
+                                    {"contacts": rows, "cells": cells, "kind": m["kind"]})
+                    yield Block(np.zeros(rows["time"].size), Domain.CONTACTS, b.t0, b.span,
+                                b.fs, b.positions, pose=b.pose, index=b.index, meta=meta)
                     cand, cells = [], 0
         finally:
             if pool is not None:
                 pool.shutdown()
 
     def _finish(self, b: Block, cand: list, cells: int) -> dict:
-        m = b.meta
+        pm = b.meta
+        m = pm.extra
         c = self.ctx.sound_speed
         if cand:
-            cone, tau, rate, snr = (np.array(v, float) for v in zip(*cand))
+            cone, tau, rate, snr, peak = (np.array(v, float) for v in zip(*cand))
         else:
-            cone = tau = rate = snr = np.zeros(0)
-        rng = bistatic_range(c * tau, cone, m["projector"])
+            cone = tau = rate = snr = peak = np.zeros(0)
+        rng = bistatic_range(c * tau, cone, pm.projector, pm.speed, c)
         ok = np.isfinite(rng) & (rng >= self.min_range_m)
-        cone, tau, rate, snr, rng = cone[ok], tau[ok], rate[ok], snr[ok], rng[ok]
+        cone, tau, rate, snr, rng, peak = (v[ok] for v in (cone, tau, rate, snr, rng, peak))
         gate = self.merge_range_m if self.merge_range_m > 0 else 4 * c / (2 * m["bandwidth"])
-        keep = merge(rng, cone, snr, gate, self.merge_cone_deg)
+        # one echo, one lag on every beam: merge on the path c tau (range depends on the cone
+        # through the projector offset), strongest peak first (equal noise on every beam)
+        keep = merge(c * tau, cone, peak, 2 * gate, self.merge_cone_deg)
         cone, tau, rate, snr, rng = cone[keep], tau[keep], rate[keep], snr[keep], rng[keep]
-        absd = absolute_doppler(rate, cone, m["speed"])
-        port, stbd = bearings(m["heading"], cone)
+        absd = absolute_doppler(rate, cone, pm.speed)
+        port, stbd = bearings(pm.heading, cone)
         moving = np.abs(absd) > self.moving_threshold * KNOT
         if cm.insensitive(m["kind"]):
             moving[:] = False
         n = rng.size
-        return {"time": b.t0 + tau, "ping": np.full(n, m["ping"], np.int64), "range_m": rng,
+        return {"time": b.t0 + tau, "ping": np.full(n, pm.ping, np.int64), "range_m": rng,
                 "cone_deg": cone, "bearing_port_deg": port, "bearing_stbd_deg": stbd,
                 "range_rate_mps": rate, "absolute_doppler_mps": absd, "snr_db": snr,
-                "moving": moving, "waveform": np.full(n, str(m["waveform"]).encode(), "S32"),
+                "moving": moving, "waveform": np.full(n, str(pm.waveform).encode(), "S32"),
                 "cells": np.full(n, cells, np.int64)}

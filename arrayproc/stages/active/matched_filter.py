@@ -1,13 +1,13 @@
 """``matched_filter``: the wideband Doppler matched-filter bank of thesis eqs. (4.7)-(4.8) on
 each ping's beams (:mod:`arrayproc.stages.active.bank`), streamed in beam chunks.
 
-Input: ``active_beams`` blocks (one per ping). Output: blocks of domain
-``("beam", "range_rate", "range")`` holding |chi|^2 (float32) of ``chunk`` beams x D range-rate
-channels x the ping's lags; ``meta``: ``ping``, ``waveform``, ``kind``, ``range_rates`` (D,)
-m/s, ``lag0`` (lag index of column 0), ``fs_bb``, ``beam_index`` (indices into the ping's
-beams), ``cones`` (deg), ``last`` (the ping's final block), ``cells`` (cells computed in
-the block) and the ping's ``speed``, ``heading``, ``projector``. A ping's cube (e.g. 271
-channels x 181 beams x 35 000 lags) is never held: only one chunk exists at a time.
+Input: ``active_beams`` blocks (one per ping). Output: blocks of domain ``RANGE_DOPPLER``
+(beam x range_rate x range) holding |chi|^2 (float32) of ``chunk`` beams x D range-rate
+channels x the ping's lags, with the ping's :class:`arrayproc.chain.domains.PingMeta`; its
+``extra``: ``kind`` (waveform kind), ``range_rates`` (D,) m/s, ``lag0`` (lag index of column
+0), ``fs_bb``, ``bandwidth``, ``beam_index`` (indices into the ping's beams), ``cones`` (deg),
+``last`` (the ping's final block) and ``cells`` (cells computed in the block). A ping's
+cube (e.g. 271 channels x 181 beams x 35 000 lags) is never held: one chunk at a time.
 
 The replicas come from the recording (``/active/waveforms``), so one chain serves any
 waveform; a Doppler-insensitive one (HFM, LFM) gets the single channel 0 m/s.
@@ -36,6 +36,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from arrayproc.chain import Block, Param, Stage, positive, register
+from arrayproc.chain.domains import Domain, PingMeta
 from arrayproc.errors import ConfigError
 
 from . import _common as cm
@@ -48,6 +49,8 @@ class MatchedFilter(Stage):
     """Doppler matched-filter bank per ping and beam (see module doc)."""
 
     kind = "matched_filter"
+    accepts = frozenset({Domain.BEAM_TIME})
+    produces = Domain.RANGE_DOPPLER
     params = {
         "range_rate": Param("table", {}, "range-rate channels {min, max, step}, m/s (default "
                             "+-15 m/s at the waveform's 3 dB Doppler resolution)"),
@@ -60,6 +63,10 @@ class MatchedFilter(Stage):
 
     def validate(self) -> None:
         w = f"stage {self.name!r}"
+        try:  # keys and signs now; the step default needs the waveform, known at run time
+            range_rate_grid(self.range_rate, 1000.0, 1.0, 1500.0, False)
+        except ConfigError as e:
+            raise ConfigError(f"{w}: {e}") from None
         if self.bracket is not None:
             b = dict(self.bracket)
             if set(b) - {"source", "range_m", "cone_deg"} or not isinstance(b.get("source"),
@@ -129,35 +136,35 @@ class MatchedFilter(Stage):
         for b in blocks:
             if act is None:
                 act = cm.schedule(self.ctx.recording, f"stage {self.name!r}")
-            wf = act.waveforms[b.meta["waveform"]]
+            wf = act.waveforms[b.meta.waveform]
             if self.bracket is not None:
                 yield from self._bracketed(b, wf)
             else:
                 yield from self._full(b, wf)
 
-    def _meta(self, b: Block, wf, rr: np.ndarray, **kw) -> dict:
-        m = {"ping": b.meta["ping"], "waveform": b.meta["waveform"], "kind": wf.kind,
-             "range_rates": rr, "fs_bb": b.fs, "speed": b.meta["speed"],
-             "heading": b.meta["heading"], "projector": b.meta["projector"],
-             "bandwidth": wf.bandwidth}
-        m.update(kw)
-        return m
+    def _meta(self, b: Block, wf, rr: np.ndarray, **kw) -> PingMeta:
+        m = b.meta
+        extra = {"kind": wf.kind, "range_rates": rr, "fs_bb": b.fs, "bandwidth": wf.bandwidth}
+        extra.update(kw)
+        return PingMeta(m.ping, m.waveform, m.t_ping, m.fc, m.speed, m.heading, m.projector,
+                        extra)
 
     def _n_lags(self, b: Block) -> int:
-        n = int(b.meta["n_lags"])
+        n = int(b.meta.extra["n_lags"])
         if self.max_range_m > 0:
             n = min(n, int(np.ceil(2.2 * self.max_range_m / self.ctx.sound_speed * b.fs)))
         return n
 
     def _full(self, b: Block, wf) -> Iterator[Block]:
-        plan = b.meta["plan"]
-        rr, bank = self._bank(b.meta["waveform"], wf, plan.f0, plan.df, plan.n_bins)
-        nb, k = b.data.shape
+        plan = b.meta.extra["plan"]
+        rr, bank = self._bank(b.meta.waveform, wf, plan.f0, plan.df, plan.n_bins)
+        data = b.data.T  # (B, K), beam-major
+        nb, k = data.shape
         nl = self._n_lags(b)
         w = self._workers()
         for a in range(0, nb, self.chunk):
             idx = np.arange(a, min(nb, a + self.chunk))
-            spec = sfft.fft(b.data[idx], axis=1, workers=w).astype(np.complex64)
+            spec = sfft.fft(data[idx], axis=1, workers=w).astype(np.complex64)
             out = np.empty((idx.size, rr.size, nl), np.float32)
 
             def one(j: int, spec=spec, out=out) -> None:
@@ -166,14 +173,14 @@ class MatchedFilter(Stage):
             self._map(one, list(range(idx.size)))
             cones = np.asarray(b.beams)[idx]
             self._write_rd(b, rr, out, idx, cones, 0)
-            yield Block(out, cm.PLANE_DOMAIN, b.t0, b.span, b.fs, b.positions, pose=b.pose,
-                        beams=cones, index=b.index,
+            yield Block(out, Domain.RANGE_DOPPLER, b.t0, b.span, b.fs, b.positions,
+                        pose=b.pose, beams=cones, index=b.index,
                         meta=self._meta(b, wf, rr, lag0=0, beam_index=idx, cones=cones,
                                         last=idx[-1] == nb - 1, cells=out.size))
 
     def _write_rd(self, b: Block, rr: np.ndarray, out: np.ndarray, idx: np.ndarray,
                   cones: np.ndarray, lag0: int) -> None:
-        if self.range_doppler is None or b.meta["ping"] not in self._rd[0]:
+        if self.range_doppler is None or b.meta.ping not in self._rd[0]:
             return
         w = self.products("range_doppler")
         if w is None:
@@ -186,16 +193,17 @@ class MatchedFilter(Stage):
             hit = np.flatnonzero(idx == bi)
             if hit.size == 0:
                 continue
-            proj = b.meta["projector"]
-            l0 = int(np.floor(bistatic_path(lo, axis[bi], proj) / c * b.fs)) - lag0
+            proj = b.meta.projector
+            l0 = int(np.floor(bistatic_path(lo, axis[bi], proj, b.meta.speed, c) / c * b.fs))
+            l0 -= lag0
             nl = int(np.ceil(2 * (hi - lo) / c * b.fs))
             if l0 < 0 or l0 + nl > out.shape[2]:
                 continue
             lags = (lag0 + l0 + np.arange(nl)) / b.fs
             from .contacts import bistatic_range
-            rng = bistatic_range(lags * c, axis[bi], proj)
+            rng = bistatic_range(lags * c, axis[bi], proj, b.meta.speed, c)
             lev = 10 * np.log10(np.maximum(out[hit[0], :, l0:l0 + nl], 1e-30))
-            w.append(time=np.array([b.t0]), ping=np.array([b.meta["ping"]]),
+            w.append(time=np.array([b.t0]), ping=np.array([b.meta.ping]),
                      cone_deg=np.array([axis[bi]]), range_m=rng[None],
                      range_rate_mps=rr[None], level_db=lev[None].astype(np.float32))
 
@@ -203,11 +211,12 @@ class MatchedFilter(Stage):
         if cm.insensitive(wf.kind):
             return
         src, rgate, cgate = self._br
-        prev = cm.previous_insensitive(self.ctx, src, int(b.meta["ping"]))
-        nb, k = b.data.shape
+        prev = cm.previous_insensitive(self.ctx, src, int(b.meta.ping))
+        data = b.data.T
+        nb, k = data.shape
         fs_bb = b.fs
         c = self.ctx.sound_speed
-        plan = b.meta["plan"]
+        plan = b.meta.extra["plan"]
         rr = range_rate_grid(self.range_rate, wf.fc, wf.duration, c, False)
         n_rep = int(np.ceil(wf.duration / float(doppler_scale(rr.max(), c)) * fs_bb)) + 8
         nl_all = self._n_lags(b)
@@ -220,8 +229,9 @@ class MatchedFilter(Stage):
                 if beams.size == 0:
                     beams = np.array([int(np.argmin(np.abs(axis - cone)))])
                 for bi in beams:
-                    a = bistatic_path(max(r - rgate, 0.0), axis[bi], b.meta["projector"])
-                    e = bistatic_path(r + rgate, axis[bi], b.meta["projector"])
+                    a = bistatic_path(max(r - rgate, 0.0), axis[bi], b.meta.projector,
+                                      b.meta.speed, c)
+                    e = bistatic_path(r + rgate, axis[bi], b.meta.projector, b.meta.speed, c)
                     l0 = max(0, int(np.floor(a / c * fs_bb)))
                     l1 = min(nl_all, int(np.ceil(e / c * fs_bb)) + 1)
                     if l1 > l0:
@@ -238,8 +248,8 @@ class MatchedFilter(Stage):
             for l0, l1 in merged:
                 blocks.append((bi, l0, l1))
         if not blocks:
-            yield Block(np.zeros((0, rr.size, 0), np.float32), cm.PLANE_DOMAIN, b.t0, b.span,
-                        fs_bb, b.positions, pose=b.pose, beams=axis[:0], index=b.index,
+            yield Block(np.zeros((0, rr.size, 0), np.float32), Domain.RANGE_DOPPLER, b.t0,
+                        b.span, fs_bb, b.positions, pose=b.pose, beams=axis[:0], index=b.index,
                         meta=self._meta(b, wf, rr, lag0=0, beam_index=np.zeros(0, np.int64),
                                         cones=axis[:0], last=True, cells=0))
             return
@@ -247,15 +257,15 @@ class MatchedFilter(Stage):
         for j, (bi, l0, l1) in enumerate(blocks):
             nseg = sfft.next_fast_len(l1 - l0 + n_rep)
             seg = np.zeros(nseg, np.complex64)
-            take = b.data[bi, l0:min(k, l0 + nseg)]
+            take = data[bi, l0:min(k, l0 + nseg)]
             seg[:take.size] = take
             # bins of the segment's FFT: baseband offsets j fs_bb / nseg above f0
-            _, bank = self._bank(b.meta["waveform"], wf, plan.f0, fs_bb / nseg, nseg)
+            _, bank = self._bank(b.meta.waveform, wf, plan.f0, fs_bb / nseg, nseg)
             spec = sfft.fft(seg, workers=w).astype(np.complex64)
             out = np.empty((1, rr.size, l1 - l0), np.float32)
             self._correlator(rr.size, nseg)(spec, bank, out[0], 0)
-            yield Block(out, cm.PLANE_DOMAIN, b.t0, b.span, fs_bb, b.positions, pose=b.pose,
-                        beams=axis[[bi]], index=b.index,
+            yield Block(out, Domain.RANGE_DOPPLER, b.t0, b.span, fs_bb, b.positions,
+                        pose=b.pose, beams=axis[[bi]], index=b.index,
                         meta=self._meta(b, wf, rr, lag0=l0, beam_index=np.array([bi]),
                                         cones=axis[[bi]], last=j == len(blocks) - 1,
                                         cells=out.size))

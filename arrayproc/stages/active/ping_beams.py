@@ -5,10 +5,11 @@ For every transmission in the recording's ``/active/pings`` the stage gathers th
 the transmission time t_p to t_p + ``window_s`` + the pulse length (``window_s`` = 0: up to the
 next transmission, or the recording's end), beamforms them in the frequency domain over the
 waveform's band and yields one block per ping: complex baseband beam series, domain
-``("beam", "time")``, (B, K) complex64 at ``fs = fs_bb``, ``t0 = t_p``. ``meta``: ``ping``,
-``waveform`` (name), ``plan`` (:class:`arrayproc.stages.active.bank.BandPlan`), ``n_lags``
-(lags 0 ... n_lags-1 are complete echoes inside the window), ``speed`` (m/s) and ``heading``
-(deg) of the array at t_p, ``projector`` (body-frame offset, m). Input blocks are consumed, not
+``BEAM_TIME`` (time x beam: a transposed view of a beam-major (B, K) complex64 array) at
+``fs = fs_bb``, ``t0 = t_p``, with :class:`arrayproc.chain.domains.PingMeta` (``fc`` the
+baseband's lowest frequency f0; ``extra``: ``plan``, the
+:class:`arrayproc.stages.active.bank.BandPlan`, and ``n_lags``, lags 0 ... n_lags-1 being
+complete echoes inside the window). Input blocks are consumed, not
 passed on; memory holds one window of hydrophone samples and the beams of one ping.
 """
 
@@ -20,6 +21,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from arrayproc.chain import Block, Param, Stage, register
+from arrayproc.chain.domains import Domain, PingMeta
 from arrayproc.errors import ConfigError
 
 from . import _common as cm
@@ -32,6 +34,8 @@ class ActiveBeams(Stage):
     """Beam time series per ping receive window (see module doc)."""
 
     kind = "active_beams"
+    accepts = frozenset({Domain.TIME})
+    produces = Domain.BEAM_TIME
     params = {
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
                        "cone angles {start, stop, count} or {bearings, elevations}, deg"),
@@ -88,8 +92,8 @@ class ActiveBeams(Stage):
         nxt = 0  # next ping to emit
         positions = None
         for b in blocks:
-            x = b.data[: b.meta.get("n_valid", b.data.shape[0])]
-            s0 = int(b.meta.get("sample0", round(b.t0 * b.fs)))
+            x = b.data[: b.meta.n_valid]
+            s0 = int(b.meta.sample0)
             positions = b.positions
             if buf.shape[0] == 0 or buf_start + buf.shape[0] != s0:
                 buf, buf_start = np.asarray(x, np.float32), s0
@@ -125,9 +129,8 @@ class ActiveBeams(Stage):
         tp = float(act.time[i])
         pose = self.ctx.recording.pose(tp)
         n_lags = min(plan.n_bins, int(np.floor(n_lag * plan.fs_bb / fs)))
-        return Block(y, cm.BEAM_DOMAIN, tp, n / fs, plan.fs_bb, positions, pose=pose,
-                     beams=self.beam_axis, index=i,
-                     meta={"ping": i, "waveform": name, "plan": plan, "n_lags": n_lags,
-                           "speed": float(pose.speed), "heading": float(pose.heading),
-                           "projector": np.asarray(act.projector, float),
-                           "beam_mode": self.beam_mode})
+        meta = PingMeta(i, name, tp, plan.f0, float(pose.speed), float(pose.heading),
+                        np.asarray(act.projector, float),
+                        {"plan": plan, "n_lags": n_lags, "beam_mode": self.beam_mode})
+        return Block(y.T, Domain.BEAM_TIME, tp, n / fs, plan.fs_bb, positions, pose=pose,
+                     beams=self.beam_axis, index=i, meta=meta)

@@ -11,11 +11,24 @@ from arrayproc.stages.active import contacts as ct
 
 
 @given(r=st.floats(300.0, 30000.0), cone=st.floats(0.0, 180.0),
-       px=st.floats(-100.0, 100.0), pz=st.floats(0.0, 50.0))
-def test_bistatic_range_inverts_path(r, cone, px, pz):
+       px=st.floats(-100.0, 100.0), pz=st.floats(0.0, 50.0), u=st.floats(0.0, 8.0))
+def test_bistatic_range_inverts_path(r, cone, px, pz, u):
     proj = np.array([px, 0.0, pz])
-    path = ct.bistatic_path(r, cone, proj)
-    assert np.isclose(ct.bistatic_range(path, cone, proj), r, rtol=1e-9, atol=1e-6)
+    path = ct.bistatic_path(r, cone, proj, u)
+    assert np.isclose(ct.bistatic_range(path, cone, proj, u), r, rtol=1e-9, atol=1e-6)
+
+
+def test_bistatic_range_moving_platform():
+    """Platform at U along +x, projector at the array (p = 0), still scatterer at (x, y): the
+    pulse leaves from -U tau relative to the array at reception; the range is recovered."""
+    u, c = 4.0, 1500.0
+    s = np.array([3000.0, 8000.0])
+    r2 = np.linalg.norm(s)
+    tau = r2 / c
+    for _ in range(50):  # transmit point -u tau, tau = (|s - tx| + r2) / c
+        tau = (np.linalg.norm(s - np.array([-u * tau, 0.0])) + r2) / c
+    cone = np.rad2deg(np.arctan2(s[1], s[0]))
+    assert np.isclose(ct.bistatic_range(c * tau, cone, np.zeros(3), u, c), r2, atol=1e-6)
 
 
 def test_bistatic_path_geometry():
