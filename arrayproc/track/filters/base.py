@@ -18,3 +18,4 @@ class Filter(Component):
     :class:`~arrayproc.track.state.ParticleState` (both expose ``x`` and ``P``)."""
 
     name = "filter"
+    n_repairs: int = 0  # covariance repairs so far (Gaussian filters count them)

@@ -84,7 +84,7 @@ class LRResolver:
         for h, state in enumerate(self.states):
             if not self.alive[h]:
                 continue
-            rep = getattr(self.filter, "n_repairs", 0)
+            rep = self.filter.n_repairs
             try:
                 pred = self.filter.predict(state, self.motion_model, dt, ctx)
                 upd, ll = self.filter.update(pred, zs[h], meas, ctx)
@@ -93,7 +93,7 @@ class LRResolver:
                 self.logw[h] = -np.inf
                 status |= 2
                 continue
-            if getattr(self.filter, "n_repairs", 0) > rep:
+            if self.filter.n_repairs > rep:
                 status |= 1
             self.states[h] = upd
             self.logw[h] += ll
