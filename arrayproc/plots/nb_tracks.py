@@ -11,6 +11,7 @@ products, when it has one.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -153,10 +154,11 @@ def _truth_from_recording(root: dict, t: np.ndarray, cone: np.ndarray, freq: np.
 
 
 @register_plot("nb_tracks")
-def plot_nb_tracks(path: str, out_png: str, truth: bool = True) -> None:
+def plot_nb_tracks(path: str, out_png: str, truth: bool = True, **_other: Any) -> None:
     """Draw every ``nb_tracks`` group of the products file ``path`` into ``out_png`` (see the
     module docstring); frequencies are shown as received (own Doppler added back with the
-    recording's navigation when it is known)."""
+    recording's navigation when it is known). Options of the image plots (``range_db``,
+    ``beam``) do not apply and are ignored."""
     from arrayproc.io.products import read_products
 
     groups = read_products(path)
