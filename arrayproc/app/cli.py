@@ -47,7 +47,8 @@ class _Parser(argparse.ArgumentParser):
     """Usage errors as one line, exit status 2."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        print(f"{self.prog}: error: {message} (see --help)", file=sys.stderr)
+        sub = self.prog.split(" ", 1)[1] + ": " if " " in self.prog else ""
+        print(f"arrayproc: error: {sub}{message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
 
 

@@ -280,6 +280,7 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
     from arrayproc.io.recording import open_h5
     open_h5(file, "products file").close()
     kind = kind or default_plot_kind(file)
+    check_plot_input(file, kind)
     options: dict[str, Any] = {"range_db": range_db}
     if beam is not None:
         options["beam"] = beam
@@ -294,6 +295,69 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
         discard(tmp)
         raise
     return kind
+
+
+#: What each plot reads: the product kind, its columns with their number of dimensions, and
+#: the axes that label dimension 1 (one of them) and dimension 2 of the main column.
+PLOT_INPUTS: dict[str, tuple[str, dict[str, int], tuple[str, ...], str | None]] = {
+    "btr": ("btr", {"time": 1, "power_db": 2}, ("cone_deg", "bearing_deg"), None),
+    "lofar": ("lofar", {"time": 1, "power_db": 3}, ("cone_deg", "bearing_deg"), "freq"),
+    "track": ("tracks", {"time": 1, "x": 1, "y": 1}, (), None),
+}
+
+
+def check_plot_input(path: str, kind: str) -> None:
+    """Refuse a products file whose groups cannot make the ``kind`` plot (FormatError naming
+    the group and column): missing or non-numeric columns, wrong dimensions, no rows, axes
+    that do not match the data. Only shapes and types are read."""
+    if kind not in PLOT_INPUTS:
+        return
+    import h5py
+
+    from arrayproc.io.products import FORMAT
+    from arrayproc.io.recording import _attr_str, get_object, open_h5
+    pkind, cols, axes, axis2 = PLOT_INPUTS[kind]
+    with open_h5(path, "products file") as f:
+        if _attr_str(f.attrs.get("format", "")) != FORMAT:
+            raise FormatError(f"{path}: not an arrayproc products file")
+        groups = [n for n in f if isinstance(get_object(f, Path(path), n), h5py.Group)
+                  and _attr_str(f[n].attrs.get("kind", "")) == pkind]
+        if not groups:
+            raise FormatError(f"{path}: no {pkind} group for a {kind} plot")
+        for name in groups:
+            g = f[name]
+            where = f"{path}: group {name!r} (kind {pkind!r})"
+            rows = set()
+            for col, ndim in cols.items():
+                d = get_object(f, Path(path), f"{name}/{col}")
+                if not isinstance(d, h5py.Dataset):
+                    raise FormatError(f"{where}: no column {col!r}")
+                if d.dtype.kind not in "fiu":
+                    raise FormatError(f"{where}: column {col!r} must be numeric, has type "
+                                      f"{d.dtype}")
+                if d.ndim != ndim:
+                    raise FormatError(f"{where}: column {col!r} must have {ndim} dimension(s), "
+                                      f"has shape {d.shape}")
+                rows.add(d.shape[0])
+            if len(rows) != 1:
+                raise FormatError(f"{where}: columns have different numbers of rows {rows}")
+            if rows == {0}:
+                raise FormatError(f"{where}: has 0 rows; nothing to plot")
+            main = next(c for c, n in cols.items() if n >= 2) if any(
+                n >= 2 for n in cols.values()) else None
+            if main is None:
+                continue
+            shape = g[main].shape
+            found = [a for a in axes if isinstance(g.get(a), h5py.Dataset)]
+            if axes and not found:
+                raise FormatError(f"{where}: no beam axis ({' or '.join(axes)})")
+            if found and g[found[0]].shape[0] != shape[1]:
+                raise FormatError(f"{where}: axis {found[0]!r} has {g[found[0]].shape[0]} "
+                                  f"values but {main!r} has {shape[1]} beams")
+            if axis2 is not None:
+                a2 = g.get(axis2)
+                if not isinstance(a2, h5py.Dataset) or a2.shape[0] != shape[2]:
+                    raise FormatError(f"{where}: axis {axis2!r} must have {shape[2]} values")
 
 
 def _image_format(output: str) -> str:
@@ -342,8 +406,10 @@ def _products_source(products: str) -> str | None:
         return None
     if not src:
         return None
-    p = Path(src) if Path(src).is_absolute() else Path(products).parent / src
-    return str(p) if p.exists() else None
+    for p in (Path(src), Path(products).parent / src):  # as the tracker resolves it
+        if p.exists():
+            return str(p)
+    return None
 
 
 # -- export -----------------------------------------------------------------------------------

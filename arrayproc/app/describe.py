@@ -13,6 +13,7 @@ from typing import Any
 
 import h5py
 
+from arrayproc.errors import FormatError
 from arrayproc.io.recording import _attr_str, get_object, open_h5
 
 #: Geometry summaries (line / planar / volumetric, aperture) up to this many elements.
@@ -111,7 +112,7 @@ def _truth_summary(r: Any) -> str:
     if t is None:
         return ""
     if not isinstance(t, h5py.Group):
-        return "  truth: /truth is not a group (ignored)"
+        raise FormatError(f"{p}: /truth must be a group (simulator truth), not a dataset")
     src = t.get("sources")
     n_src = len(src) if isinstance(src, h5py.Group) else 0
     return f"  truth: {n_src} source(s)" + (", pings" if "pings" in t else "")

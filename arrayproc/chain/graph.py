@@ -70,6 +70,8 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         kind = table.pop("type", None)
         if kind is None:
             raise ConfigError(f"chain: stage {i + 1}: missing required key 'type'")
+        if not isinstance(kind, str):
+            raise ConfigError(f"chain: stage {i + 1}: key 'type' must be a string, got {kind!r}")
         if kind not in STAGES:
             known = ", ".join(sorted(STAGES)) or ("none registered: import the stage modules "
                                                   "first, arrayproc.stages.load_all()")
@@ -78,10 +80,16 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         name = table.pop("name", None) or kind
         if not isinstance(name, str):
             raise ConfigError(f"chain: stage {i + 1}: key 'name' must be a string")
+        if "/" in name or name in (".", ".."):
+            raise ConfigError(f"chain: stage {i + 1}: key 'name' {name!r} must be a plain name "
+                              "(no '/', not '.' or '..'): it names the products group")
         if name in names:
             raise ConfigError(f"chain: stage {i + 1}: duplicate stage name {name!r} (give each "
                               "stage of the same type a distinct 'name')")
         src = table.pop("input", None)
+        if src is not None and not isinstance(src, str):
+            raise ConfigError(f"chain: stage {name!r}: key 'input' must be a stage name, got "
+                              f"{src!r}")
         if src is not None and src not in names:
             raise ConfigError(f"chain: stage {name!r}: key 'input' names {src!r}, which is not "
                               "an earlier stage")

@@ -8,7 +8,6 @@ bounded by the slab and block sizes, never by the file length. Files in acoular'
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,8 +16,8 @@ import h5py
 import numpy as np
 
 from arrayproc.errors import FormatError
-from arrayproc.geo.pose import Pose
 from arrayproc.geo.nav import Nav
+from arrayproc.geo.pose import Pose
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.geometry import body_to_world
 
@@ -35,8 +34,11 @@ def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
     if path.is_dir():
         raise FormatError(f"{path}: is a directory, not an HDF5 {what}")
     if not path.is_file():
-        raise FormatError(f"{path}: is not a regular file (a device, FIFO or socket), not an "
-                          f"HDF5 {what}")
+        import stat
+        mode = path.stat().st_mode
+        kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
+                else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "special")
+        raise FormatError(f"{path}: is {kind}, not a regular HDF5 {what}")
     try:
         if not h5py.is_hdf5(path):
             raise FormatError(f"{path}: not an HDF5 file")

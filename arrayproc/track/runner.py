@@ -103,6 +103,9 @@ def load_tracker_config(path: str) -> dict[str, Any]:
     cfg.setdefault("q1", Q1_PAPER)
     cfg.setdefault("q2", Q2_PAPER)
     cfg.setdefault("params", {})
+    for k in ("filter", "model", "side", "nav", "bearings", "mode"):
+        if k in cfg and not isinstance(cfg[k], str):
+            raise ConfigError(f"{path}: tracker.{k} must be a string, got {cfg[k]!r}")
     if cfg["filter"] not in FILTERS:
         raise ConfigError(f"{path}: tracker.filter must be one of {', '.join(FILTERS)}, "
                           f"not {cfg['filter']!r}")

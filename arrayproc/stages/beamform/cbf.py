@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from collections.abc import Iterator
 
 import numpy as np
@@ -154,6 +155,9 @@ class CBF(Stage):
             self.hop = max(1, self.nfft // 2)
         if not 0 < self.hop:
             raise ConfigError(f"{w}: key 'hop' must be > 0, got {self.hop}")
+        if self.hop > self.nfft:  # allowed (sparse snapshots), but never silently
+            warnings.warn(f"{w}: key 'hop' ({self.hop}) exceeds 'nfft' ({self.nfft}): each "
+                          f"snapshot skips {self.hop - self.nfft} samples", stacklevel=2)
         if self.threads < 0:
             raise ConfigError(f"{w}: key 'threads' must be >= 0, got {self.threads}")
         if self.band is not None and self.band[0] < 0:

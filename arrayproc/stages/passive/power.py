@@ -6,10 +6,11 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from arrayproc.chain import Param, Stage, register
+from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
+from arrayproc.errors import ConfigError
 
 
 @register
@@ -25,10 +26,14 @@ class Power(Stage):
     accepts = frozenset({Domain.TIME})
     params = {
         "band": Param("band", None, "frequency band [lo, hi] Hz; whole band when absent"),
-        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa for data in Pa)"),
+        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa for data in Pa)",
+                     check=positive),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
+        if self.band is not None and self.fs_in > 0 and self.band[0] >= self.fs_in / 2:
+            raise ConfigError(f"stage {self.name!r}: key 'band': {self.band} Hz lies above the "
+                              f"Nyquist frequency {self.fs_in / 2:g} Hz of its input")
         out = self.products("power")
         for b in blocks:
             n_valid = b.meta.n_valid
