@@ -1,8 +1,8 @@
 """The public API behind ``import arrayproc``: chains built with every stage type registered,
 recordings and products opened in one call.
 
-The engine (:mod:`arrayproc.chain`) knows no stage by name; this layer loads the stage modules
-(:func:`arrayproc.stages.load_all`) before any chain is built.
+The engine (:mod:`arrayproc.chain`) knows no stage by name; this layer imports the modules of
+the stages a chain names (:func:`arrayproc.stages.load`) before it is built.
 """
 
 from __future__ import annotations
@@ -11,7 +11,9 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from arrayproc import chain as _chain
-from arrayproc.stages import load_all as _load_all
+from arrayproc.config import read_toml, tomllib
+from arrayproc.errors import ConfigError
+from arrayproc.stages import load as _load
 
 
 def build_chain(config: Mapping[str, Any] | str, text: str = "") -> _chain.ChainSpec:
@@ -29,7 +31,13 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> _chain.Chain
     ChainSpec
         The stages, validated before any data is read.
     """
-    _load_all()
+    if isinstance(config, str):
+        text = config
+        try:
+            config = tomllib.loads(config)
+        except tomllib.TOMLDecodeError as e:
+            raise ConfigError(f"chain: invalid TOML ({e})") from None
+    _load_types(config)
     return _chain.build_chain(config, text)
 
 
@@ -45,8 +53,19 @@ def load_chain(path: str) -> _chain.ChainSpec:
     -------
     ChainSpec
     """
-    _load_all()
-    return _chain.load_chain(path)
+    cfg, text = read_toml(path, "chain")
+    _load_types(cfg)
+    try:
+        return _chain.build_chain(cfg, text)
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None
+
+
+def _load_types(config: Any) -> None:
+    """Import only the stage modules the chain names (start-up stays short)."""
+    tables = config.get("stage", []) if isinstance(config, Mapping) else []
+    if isinstance(tables, list):
+        _load(t.get("type") for t in tables if isinstance(t, Mapping))
 
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,

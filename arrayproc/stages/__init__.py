@@ -1,19 +1,51 @@
 """Chain stages, in folders that follow the data path: ``condition`` (DFT filter), ``beamform``
 (CBF, inverse beamforming, ETAM), ``passive`` (integration, BTR, LOFAR, bearings, band power),
-``delay``, ``active`` and ``narrowband``.
+``delay`` (transients, delays, TDOA localisation), ``active`` (ping beams, matched filter,
+CFAR) and ``narrowband`` (EKF bearing/frequency tracker).
 
-Each stage module registers its stage types when imported; :func:`load_all` imports them all.
-The engine (:mod:`arrayproc.chain`) knows none of them by name.
+Each stage module registers its stage types when imported. :data:`TYPES` says which module
+defines each chain ``type`` without importing anything, so a chain imports only the modules
+of the stages it uses (:func:`load`); a test checks that it matches the registrations. The
+engine (:mod:`arrayproc.chain`) knows none of them by name.
 """
 
 from __future__ import annotations
 
 import importlib
-import pkgutil
+from collections.abc import Iterable
+
+#: chain ``type`` -> module that registers it
+TYPES: dict[str, str] = {
+    "dft_filter": "arrayproc.stages.condition.dft_filter",
+    "cbf": "arrayproc.stages.beamform.cbf",
+    "ibf": "arrayproc.stages.beamform.ibf",
+    "psas": "arrayproc.stages.beamform.etam",
+    "etam": "arrayproc.stages.beamform.etam",
+    "integrate": "arrayproc.stages.passive.integrate",
+    "btr": "arrayproc.stages.passive.btr",
+    "lofar": "arrayproc.stages.passive.lofar",
+    "bearings": "arrayproc.stages.passive.bearings",
+    "power": "arrayproc.stages.passive.power",
+    "pass": "arrayproc.stages.passive.power",
+    "transients": "arrayproc.stages.delay.transients",
+    "tde": "arrayproc.stages.delay.tde",
+    "localise": "arrayproc.stages.delay.localise_stage",
+    "active_beams": "arrayproc.stages.active.ping_beams",
+    "matched_filter": "arrayproc.stages.active.matched_filter",
+    "cfar": "arrayproc.stages.active.detect",
+    "nb_ekf": "arrayproc.stages.narrowband.nb_ekf",
+}
+
+
+def load(types: Iterable[str]) -> None:
+    """Import the modules that register these chain types (unknown types are left to the chain
+    builder, which names them with the known ones)."""
+    for t in set(types):
+        if isinstance(t, str) and t in TYPES:
+            importlib.import_module(TYPES[t])
 
 
 def load_all() -> None:
-    """Import every stage module, which registers its stage types with the chain registry."""
-    for m in pkgutil.walk_packages(__path__, prefix=f"{__name__}."):
-        if not m.name.rsplit(".", 1)[-1].startswith("_"):
-            importlib.import_module(m.name)
+    """Import every stage module, which registers every stage type."""
+    for mod in sorted(set(TYPES.values())):
+        importlib.import_module(mod)
