@@ -73,15 +73,16 @@ def bench(fs: float, cplx: bool, seconds: float, ref_seconds: float, repeats: in
     y = data(fs, seconds, cplx)
     block = max(1, int(round(5.0 * fs)))
 
-    def run():
+    def run(threads=1):
         ekf = NarrowbandEKF(X, 64.0, 697.0, C, fc=FC if cplx else None, dual=True,
-                            reinit_s=30.0)
+                            reinit_s=30.0, threads=threads)
         for i in range(0, y.shape[0], block):
             ekf.process(y[i:i + block], i / fs, fs, 2.5)
 
     run()  # compile
     best = min(_timed(run) for _ in range(repeats))
     cpu = min(_cpu(run) for _ in range(repeats))
+    best2 = min(_timed(lambda: run(2)) for _ in range(repeats))
     yr = y[: int(ref_seconds * fs)]
     q = np.array([math.radians(0.05) ** 2, 1e-4])
     st0 = np.array([1.1, 697.0])
@@ -97,6 +98,7 @@ def bench(fs: float, cplx: bool, seconds: float, ref_seconds: float, repeats: in
     return {"fs_hz": fs, "complex": cplx, "channels": N_H, "seconds_of_data": seconds,
             "tracker_wall_s": best, "real_time_factor": seconds / best,
             "tracker_cpu_s": cpu, "real_time_factor_cpu": seconds / cpu,
+            "tracker_wall_s_2_threads": best2, "real_time_factor_2_threads": seconds / best2,
             "numpy_seconds_of_data": ref_seconds, "numpy_wall_s": t_np, "numpy_cpu_s": c_np,
             "numpy_real_time_factor_dual": ref_seconds / (2 * t_np),
             "numpy_real_time_factor_dual_cpu": ref_seconds / (2 * c_np),
@@ -130,8 +132,10 @@ def main(argv=None) -> int:
         r = bench(fs, cplx, args.seconds, ref_s, args.repeats)
         res["runs"].append(r)
         print(f"{'complex' if cplx else 'real   '} {fs:7.1f} Hz x {N_H} ch, dual EKF: "
-              f"{r['real_time_factor']:7.1f}x real time wall ({r['real_time_factor_cpu']:7.1f}x "
-              f"per CPU second); numpy same equations {r['numpy_real_time_factor_dual']:6.2f}x "
+              f"{r['real_time_factor']:7.1f}x real time wall, 1 thread "
+              f"({r['real_time_factor_2_threads']:.1f}x with 2; {r['real_time_factor_cpu']:.1f}x "
+              f"per CPU second, 1 thread); numpy same equations "
+              f"{r['numpy_real_time_factor_dual']:6.2f}x "
               f"wall ({r['numpy_real_time_factor_dual_cpu']:6.2f}x CPU); numba/numpy "
               f"{r['speedup_vs_numpy_per_filter_sample']:5.1f}x wall, "
               f"{r['speedup_vs_numpy_cpu']:5.1f}x CPU", flush=True)

@@ -29,6 +29,7 @@ variance over A² (or ``noise`` / A² when the user gives it).
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,13 +81,17 @@ class NarrowbandEKF:
     align_phase : bool
         Choose each (re)start's time origin so that the model phase matches (see the module
         docstring); False re-initialises with the origin at the restart time (the thesis).
+    threads : int
+        With ``dual``, run the two filters of each span in two threads (the kernel releases
+        the GIL; the filters are independent between re-initialisations, so the output is
+        the same).
     """
 
     def __init__(self, x: np.ndarray, cone_deg: float, freq_hz: float, sound_speed: float,
                  fc: float | None = None, p0: tuple[float, float] = (2.0, 0.5),
                  q: tuple[float, float] = (0.05, 0.01), noise: float | None = None,
                  reinit_s: float = 30.0, dual: bool = True, amp_tau_s: float = 5.0,
-                 align_phase: bool = True) -> None:
+                 align_phase: bool = True, threads: int = 1) -> None:
         # positions from the array centre: the model's common phase then refers to the centre,
         # where a cone error adds no phase (any reference is a constant phase for eq. (3.21))
         x = np.asarray(x, float)
@@ -102,6 +107,7 @@ class NarrowbandEKF:
         self.dual = bool(dual)
         self.amp_tau_s = float(amp_tau_s)
         self.align_phase = bool(align_phase)
+        self._pool = (ThreadPoolExecutor(2) if self.dual and threads > 1 else None)
         self._x0 = np.array([math.radians(cone_deg), float(freq_hz)])
         self._filters: list[_Filter] | None = None
         self._a2: float | None = None
@@ -208,10 +214,18 @@ class NarrowbandEKF:
             nxt = min(f.next_reinit for f in self._filters)
             k1 = min(n_t, max(k + 1, int(math.ceil((nxt - t0) * fs - 1e-9))))
             mix0 = 2.0 * math.pi * math.fmod(fc * t_k, 1.0)
-            for f, o in zip(self._filters, outs):
+
+            def span(f: _Filter, o: np.ndarray, k=k, k1=k1, t_k=t_k, mix0=mix0) -> None:
                 _kernels.ekf_span(yr[k:k1], yi[k:k1] if cplx else yi, cplx, t_k - f.origin,
                                   dt, speed, self.x, self.c, mix0, mix_step, rinv, self.q,
                                   f.state, f.cov, o[k:k1], self.uniform)
+
+            if self._pool is not None:
+                for fut in [self._pool.submit(span, f, o) for f, o in zip(self._filters, outs)]:
+                    fut.result()
+            else:
+                for f, o in zip(self._filters, outs):
+                    span(f, o)
             i = self._active()
             res[k:k1] = outs[i][k:k1]
             which[k:k1] = i
