@@ -11,7 +11,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from arrayproc import chain as _chain
-from arrayproc.config import read_toml, tomllib
+from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError
 from arrayproc.stages import load as _load
 
@@ -31,12 +31,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> _chain.Chain
     ChainSpec
         The stages, validated before any data is read.
     """
-    if isinstance(config, str):
-        text = config
-        try:
-            config = tomllib.loads(config)
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"chain: invalid TOML ({e})") from None
+    config, text = _chain.graph.parse_chain(config, text)
     _load_types(config)
     return _chain.build_chain(config, text)
 

@@ -32,6 +32,16 @@ class ChainSpec:
 INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive)}
 
 
+def parse_chain(config: Mapping[str, Any] | str, text: str = "") -> tuple[Mapping[str, Any], str]:
+    """A chain given as TOML text or as a parsed mapping, as ``(mapping, text)``."""
+    if isinstance(config, str):
+        try:
+            return tomllib.loads(config), config
+        except tomllib.TOMLDecodeError as e:
+            raise ConfigError(f"chain: invalid TOML ({e})") from None
+    return config, text
+
+
 def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
     """Build and validate a chain from a parsed TOML mapping (or TOML text).
 
@@ -39,12 +49,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
     types, unknown or mistyped keys, missing required keys and dangling ``input`` names raise
     :class:`ConfigError` naming the stage and key.
     """
-    if isinstance(config, str):
-        text = config
-        try:
-            config = tomllib.loads(config)
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"chain: invalid TOML ({e})") from None
+    config, text = parse_chain(config, text)
     for key in config:
         if key not in ("input", "stage"):
             raise ConfigError(f"chain: unknown top-level key {key!r} (expected [input] and "
