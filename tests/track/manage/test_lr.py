@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from arrayproc.evaluate.montecarlo import LRScenario, run_case
-from arrayproc.track.filters import make_filter
+from arrayproc.track.filters import Filter, make_filter
 from arrayproc.track.init import initial_state
 from arrayproc.track.manage import _kernels as kl
 from arrayproc.track.manage.lr import LRResolver, fused_kind
@@ -19,7 +19,7 @@ from arrayproc.track.state import Context, GaussianState
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 
 
-class _Const:
+class _Const(Filter):
     """A stand-in filter whose likelihood is the measurement itself, to check eqs. (10)-(13)
     by hand."""
 
