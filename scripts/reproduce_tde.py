@@ -275,8 +275,8 @@ def plot(res: dict, outdir: Path) -> list[str]:
         ax.set_title(f"W = {r['width_hz']:g} Hz, band {r['band_hz'][0]:g}-{r['band_hz'][1]:g}")
         ax.set_xlabel("SNR (dB)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.set_ylim(1e-8, 1)
-    np.atleast_1d(axes)[0].set_ylabel("delay standard deviation (s)")
+        ax.set_ylim(1e-9, 1)
+    np.atleast_1d(axes)[0].set_ylabel("delay RMS error (s)")
     np.atleast_1d(axes)[0].legend(fontsize=8)
     fig.suptitle("thesis fig. 3.15: cross-correlation delay estimation, fs 5120 Hz, T = 1 s")
     fig.tight_layout()
@@ -317,8 +317,13 @@ def main(argv: list[str] | None = None) -> int:
                          "correlation of the finite windows instead of one signal period")
     ap.add_argument("--only", choices=("fig315", "fig316", "phat", "loc"), nargs="*")
     ap.add_argument("--json", help="write the results here")
+    ap.add_argument("--from-json", help="only redraw the figures of an earlier --json file")
     ap.add_argument("--plot", help="directory for the figures")
     a = ap.parse_args(argv)
+    if a.from_json:
+        old = json.loads(Path(a.from_json).read_text())
+        print("\n".join(plot(old, Path(a.plot or "."))))
+        return 0
     snrs = np.arange(a.snr[0], a.snr[1] + 1e-9, a.snr[2])
     want = set(a.only or ("fig315", "fig316", "phat", "loc"))
     res: dict = {"fs_hz": FS, "T_s": N / FS, "fc_hz": a.fc, "runs": a.runs, "seed": a.seed}
