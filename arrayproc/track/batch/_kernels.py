@@ -109,35 +109,32 @@ def bo_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, meas: 
 
 
 @njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
-def td_cost_population(pop: np.ndarray, tau: np.ndarray, elem: np.ndarray, meas: np.ndarray,
-                       weight: np.ndarray, ref: int, inv_c: float) -> np.ndarray:
+def td_cost_population(pop: np.ndarray, tau: np.ndarray, elem_x: np.ndarray,
+                       elem_y: np.ndarray, wmeas: np.ndarray, w_over_c: np.ndarray,
+                       ref: int) -> np.ndarray:
     """Time-delay TMA cost Σ_{b,n} (w_bn (τ_bn − h_bn(x)))² for each state of a population.
 
     thesis eqs. (3.51), (3.52): ``h_bn = (|p_b − e_bn| − |p_b − e_b,ref|) / c`` with
     ``p_b = (x + vx t_b, y + vy t_b)``. ``pop`` (4, P); ``tau`` (B,) s since the window start;
-    ``elem`` (B, N, 2) element positions (m, world); ``meas`` (B, N) delays to the reference
-    element (s); ``weight`` (B, N) 1/σ (1/s), 0 for unused entries (the reference itself);
-    ``inv_c`` 1/c (s/m). Returns (P,).
+    ``elem_x``, ``elem_y`` (B, N) element positions (m, world; contiguous rows, so that the
+    inner loop over hydrophones vectorises); ``wmeas`` (B, N) = w τ with ``w = 1/σ`` (0 for
+    unused entries, e.g. the reference); ``w_over_c`` (B, N) = w / c. Returns (P,).
     """
     n_pop = pop.shape[1]
-    n_b, n_h = meas.shape
+    n_b, n_h = wmeas.shape
     out = np.empty(n_pop)
     for p in prange(n_pop):
-        x0 = pop[0, p]
-        y0 = pop[1, p]
-        vx = pop[2, p]
-        vy = pop[3, p]
         s = 0.0
         for b in range(n_b):
-            px = x0 + vx * tau[b]
-            py = y0 + vy * tau[b]
-            rx = px - elem[b, ref, 0]
-            ry = py - elem[b, ref, 1]
+            px = pop[0, p] + pop[2, p] * tau[b]
+            py = pop[1, p] + pop[3, p] * tau[b]
+            rx = px - elem_x[b, ref]
+            ry = py - elem_y[b, ref]
             r_ref = np.sqrt(rx * rx + ry * ry)
             for n in range(n_h):
-                dx = px - elem[b, n, 0]
-                dy = py - elem[b, n, 1]
-                e = (meas[b, n] - (np.sqrt(dx * dx + dy * dy) - r_ref) * inv_c) * weight[b, n]
+                dx = px - elem_x[b, n]
+                dy = py - elem_y[b, n]
+                e = wmeas[b, n] - w_over_c[b, n] * (np.sqrt(dx * dx + dy * dy) - r_ref)
                 s += e * e
         out[p] = s
     return out

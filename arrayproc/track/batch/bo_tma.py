@@ -164,11 +164,14 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
                           search.bounds, search.to_state, seed, popsize=popsize,
                           maxiter=maxiter)
     r = res(x)
-    sig = sigma_rad if sigma_rad else float(np.sqrt(np.sum(r**2) / max(t.size - 4, 1)))
+    rss = float(np.sum((r / w) ** 2))
+    sig = sigma_rad if sigma_rad else float(np.sqrt(rss / max(t.size - 4, 1)))
     if not sigma_rad:  # re-weight with the estimated σ
         r, w[:] = r / sig, 1.0 / sig
-    return finish_solution("bearings", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig), o0,
-                           bearing_model(x, tau, obs), n_used=t.size, n_rejected=n_rej)
+    sol = finish_solution("bearings", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig), o0,
+                          bearing_model(x, tau, obs), n_used=t.size, n_rejected=n_rej)
+    sol.rss = rss
+    return sol
 
 
 def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
@@ -190,29 +193,21 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
         Bearing (cone) standard deviation (rad).
     side : {"port", "starboard", "auto"}
         Mirror hypothesis: bearing ``heading − θ`` (port) or ``heading + θ`` (starboard);
-        ``auto`` solves both and keeps the smaller cost (with ``sigma_rad`` None, σ is then
-        the robust residue scale of a polynomial fitted to the cone angles, the same for
-        both hypotheses).
+        ``auto`` solves both and keeps the one with the smaller sum of squared residuals
+        (the larger likelihood, with σ given or estimated).
     **kw
         Passed to :func:`solve_bearings`.
 
     Returns
     -------
     TmaSolution
-        With ``side`` and, for ``auto``, ``cost_other`` (the rejected hypothesis's cost).
+        With ``side`` and, for ``auto``, ``cost_other`` (the rejected hypothesis's cost,
+        weighted with the kept solution's σ).
     """
     if side not in SIDES:
         raise ValueError(f"side must be one of {SIDES}, not {side!r}")
     cone = np.asarray(cone_rad, float)
     hd = np.asarray(heading_rad, float)
-    if not sigma_rad and side == "auto":
-        # one σ for both hypotheses, so that their costs compare: the robust scale of the
-        # residues of a polynomial fitted to the cone-angle sequence
-        t = np.asarray(times, float)
-        keep = reject_outliers(t, cone, None, int(kw.get("poly_degree", 5)))
-        deg = int(min(int(kw.get("poly_degree", 5)), max(keep.sum() - 2, 0)))
-        fit = np.polynomial.Polynomial.fit(t[keep], cone[keep], deg)
-        sigma_rad = float(1.4826 * np.median(np.abs(cone[keep] - fit(t[keep]))))
     sols = {}
     for s, sign in (("port", -1.0), ("starboard", 1.0)):
         if side in (s, "auto"):
@@ -221,6 +216,7 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
             sols[s] = sol
     if len(sols) == 1:
         return next(iter(sols.values()))
-    best, other = sorted(sols.values(), key=lambda s: s.cost)
-    best.cost_other = other.cost
+    best, other = sorted(sols.values(), key=lambda s: s.rss)
+    # the other hypothesis's cost with the kept one's σ (the given σ, or its estimate)
+    best.cost_other = other.rss * best.cost / best.rss if best.rss > 0 else float("inf")
     return best

@@ -62,6 +62,8 @@ class TmaSolution:
         Observer (array) position at ``t0`` (m).
     fitted : ndarray
         Model values at the estimate for the measurements used (rad or s).
+    rss : float
+        Unweighted sum of squared residuals (rad² or s²), NaN when not computed.
     """
 
     t0: float
@@ -79,6 +81,7 @@ class TmaSolution:
     cost_other: float = float("nan")
     observer: np.ndarray = field(default_factory=lambda: np.zeros(2))
     fitted: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    rss: float = float("nan")
 
     @property
     def heading_deg(self) -> float:

@@ -198,8 +198,12 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
             ends.append(np.array([cands[side]] if side != "auto" else list(cands.values())))
         margin = max(margin, 10 * sc)
     search = PolarSearch(ends[0], ends[1], margin, min_range_m, max_range_m, t1 - t0, o0, o1)
+    ex = np.ascontiguousarray(elem[..., 0])
+    ey = np.ascontiguousarray(elem[..., 1])
+    wm = w * yz
+    wc = w / sound_speed
     x = global_then_local(
-        lambda p: td_cost_population(p, tau, elem, yz, w, ref, 1.0 / sound_speed), res, jac,
+        lambda p: td_cost_population(p, tau, ex, ey, wm, wc, ref), res, jac,
         search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
     r = res(x)
     wj = jac(x)

@@ -53,7 +53,8 @@ def test_td_cost_population_matches_numpy():
     meas = rng.normal(0, 1e-3, (tr.time.size, 16))
     w = rng.uniform(0.5, 2.0, meas.shape) * 1e3
     w[:, 3] = 0.0
-    got = K.td_cost_population(pop, tr.time, el, meas, w, 3, 1 / 1500.0)
+    got = K.td_cost_population(pop, tr.time, np.ascontiguousarray(el[..., 0]),
+                               np.ascontiguousarray(el[..., 1]), w * meas, w / 1500.0, 3)
     np.testing.assert_allclose(got, td_cost(pop, tr.time, el, meas, w, 3, 1500.0), rtol=1e-10)
 
 

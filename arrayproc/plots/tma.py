@@ -1,0 +1,165 @@
+"""Batch TMA plot (products ``tma``): plan view and measured against fitted measurements.
+
+Left: the ownship track over the solutions' windows, each solution's constant-velocity track
+over its window with the 2σ CRLB position ellipse at its start (thesis eq. (3.53)), and the
+truth when the recording has ``/truth/sources``. Right: the measurements the solution was
+fitted to (bearings in degrees, or the delays of a few hydrophones in milliseconds) against
+time, with the model's values at the estimate; time runs down (sonar orientation).
+Positions in km, x east / y north.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import h5py
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Ellipse
+
+from arrayproc.errors import FormatError
+from arrayproc.plots import register_plot
+
+
+def _s(v: Any) -> str:
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _ellipse(ax, mean: np.ndarray, cov: np.ndarray, nsig: float = 2.0, **kw: Any) -> None:
+    """nsig-sigma ellipse of a 2×2 covariance (m²) around mean (m), drawn in km."""
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    w = np.clip(w, 0.0, None)
+    ang = np.degrees(np.arctan2(v[1, 1], v[0, 1]))
+    ax.add_patch(Ellipse(mean / 1e3, 2 * nsig * np.sqrt(w[1]) / 1e3,
+                         2 * nsig * np.sqrt(w[0]) / 1e3, angle=ang, fill=False, **kw))
+
+
+def _truth(path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    if not path or not os.path.exists(path):
+        return out
+    with h5py.File(path, "r") as f:
+        if "truth/sources" not in f:
+            return out
+        for name, g in f["truth/sources"].items():
+            if isinstance(g, h5py.Group) and "time" in g and "position" in g:
+                out[name] = (np.asarray(g["time"][()], float),
+                             np.asarray(g["position"][()], float))
+    return out
+
+
+@register_plot("tma")
+def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
+    """Draw the ``tma`` group of a products file (see the module docstring).
+
+    Parameters
+    ----------
+    path : str
+        Products file written by ``arrayproc tma``.
+    out_png : str
+        Image file.
+    truth : bool
+        Overlay the recording's truth when it has one.
+    """
+    from arrayproc.io.products import read_products
+    from arrayproc.io.recording import Recording
+    from arrayproc.track.batch.bo_tma import bearing_model
+    from arrayproc.track.batch.compact import compact_bearings
+    from arrayproc.track.batch.run import read_measurements
+    from arrayproc.track.batch.td_tma import delay_model
+
+    prod = read_products(path)
+    names = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "tma"]
+    if not names:
+        raise FormatError(f"{path}: no tma group")
+    g = prod[names[0]]
+    a = g["attrs"]
+    method = _s(a.get("method", ""))
+    rec_path = _s(a.get("recording", prod["/"].get("source", "")))
+    src_path = _s(a.get("products", ""))
+    sides = _s(a.get("side", "")).split(",")
+    n = g["x"].shape[0]
+    fig, (ax, axm) = plt.subplots(1, 2, figsize=(12, 6))
+    t_all = np.concatenate([np.linspace(g["t0"][i], g["t1"][i], 50) for i in range(n)])
+    rec = Recording(rec_path) if rec_path and os.path.exists(rec_path) else None
+    try:
+        if rec is not None:
+            tt = np.linspace(t_all.min(), t_all.max(), 400)
+            own = rec.nav.at(tt)[0]
+            ax.plot(own[:, 0] / 1e3, own[:, 1] / 1e3, "k-", lw=2, label="ownship")
+            ax.plot(own[0, 0] / 1e3, own[0, 1] / 1e3, "ko")
+        if truth and rec is not None:
+            for k, (tt_s, pos) in _truth(rec_path).items():
+                sel = (tt_s >= t_all.min()) & (tt_s <= t_all.max())
+                ax.plot(pos[sel, 0] / 1e3, pos[sel, 1] / 1e3, "g--", lw=1.5,
+                        label=f"truth {k}")
+        for i in range(n):
+            st = np.array([g["x"][i], g["y"][i], g["vx"][i], g["vy"][i]])
+            tau = np.linspace(0.0, g["t1"][i] - g["t0"][i], 50)
+            tr = st[None, :2] + tau[:, None] * st[None, 2:]
+            ax.plot(tr[:, 0] / 1e3, tr[:, 1] / 1e3, "r-", label="estimate" if i == 0 else None)
+            ax.plot(st[0] / 1e3, st[1] / 1e3, "r.")
+            c = g["crlb"][i]
+            if np.all(np.isfinite(c[:2, :2])):
+                _ellipse(ax, st[:2], c[:2, :2], edgecolor="r",
+                         label="2σ CRLB at t0" if i == 0 else None)
+        ax.set_xlabel("x east (km)")
+        ax.set_ylabel("y north (km)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        ax.set_title(f"{method} TMA: {n} solution(s); dots: window starts")
+
+        meas = None
+        if src_path and os.path.exists(src_path) and rec is not None:
+            meas = read_measurements(src_path, {
+                "method": method, "group": _s(a.get("measurements", "")), "cone_gate": None})
+        if meas is None:
+            axm.text(0.5, 0.5, "measurements unavailable\n(products or recording missing)",
+                     ha="center", transform=axm.transAxes)
+        else:
+            t = meas["time"]
+            for i in range(n):
+                st = np.array([g["x"][i], g["y"][i], g["vx"][i], g["vy"][i]])
+                sel = (t >= g["t0"][i]) & (t <= g["t1"][i])
+                ts = t[sel]
+                poses = rec.poses(ts)
+                lab = i == 0
+                if method == "delays":
+                    elem = np.stack([p.elements[:, :2] for p in poses])
+                    ref = meas["reference"]
+                    fit = delay_model(st, ts - g["t0"][i], elem, ref, rec.sound_speed)
+                    chans = np.unique(np.linspace(0, elem.shape[1] - 1, 5).astype(int))
+                    chans = chans[chans != ref]
+                    for k in chans:
+                        axm.plot(1e3 * meas["tau"][sel, k], ts, ".", ms=3,
+                                 label=f"measured ch {k}" if lab else None)
+                        axm.plot(1e3 * fit[:, k], ts, "k-", lw=1,
+                                 label="fitted" if lab and k == chans[0] else None)
+                    axm.set_xlabel("delay to the reference hydrophone (ms)")
+                else:
+                    obs = np.stack([p.elements[:, :2].mean(0) for p in poses])
+                    side = sides[i] if i < len(sides) else ""
+                    y = meas["port"][sel] if side == "port" else meas["stbd"][sel]
+                    if method == "compact":
+                        q = np.array([st[0], st[1], np.arctan2(st[2], st[3])])
+                        fit = compact_bearings(q, np.hypot(st[2], st[3]), ts - g["t0"][i],
+                                               obs.mean(0))
+                    else:
+                        fit = bearing_model(st, ts - g["t0"][i], obs)
+                    axm.plot(np.degrees(y) % 360, ts, "b.", ms=3,
+                             label=f"measured ({side or 'bearing'})" if lab else None)
+                    axm.plot(np.degrees(fit) % 360, ts, "r-", label="fitted" if lab else None)
+                    axm.set_xlabel("bearing (deg true)")
+            axm.invert_yaxis()
+            axm.set_ylabel("time (s)")
+            axm.grid(True, alpha=0.3)
+            axm.legend(fontsize=8)
+            axm.set_title("measured vs fitted (time runs down)")
+    finally:
+        if rec is not None:
+            rec.close()
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,374 @@
+"""``arrayproc tma``: batch maximum-likelihood TMA over the measurements of a products file.
+
+Reads a ``bearings`` or ``delays`` group of a products file (DESIGN section 5) and the array's
+navigation and geometry from the recording (``/nav``, ``/array``; by default the recording the
+products file names as its ``source``), solves one batch per window, and writes a products
+file with one ``tma`` group (one row per solution: ``t0``, ``t1``, ``method``, ``x``, ``y``,
+``vx``, ``vy``, ``cov``, ``crlb``, ``cost``, ``fim_cond``, ``heading_deg``, ``speed_mps``,
+``range_sigma_m``, ``cost_mirror``).
+
+Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (eqs.
+(3.48)-(3.52), :mod:`.td_tma`), ``compact`` (compact-array paper eqs. (1)-(5),
+:mod:`.compact`). TMA TOML::
+
+    [tma]
+    method = "bearings"        # bearings | delays | compact
+    window = 600.0             # s, one solution per window; 0 (default): the whole file
+    step = 300.0               # s between window starts (default: window)
+    sigma_bearing_deg = 0.5    # bearings/compact; absent: estimated from the residuals
+    sigma_delay_s = 1e-4       # delays; absent: the product's sigma column, else estimated
+    group = "bearings"         # products group (default: the only group of the method's kind)
+    recording = "rec.h5"       # default: the products file's source
+    side = "auto"              # bearings/delays on a line array: auto | port | starboard;
+                               # compact: which bearing column (port | starboard) if they differ
+    cone_gate = [20.0, 160.0]  # bearings/compact: only rows with cone angles in [lo, hi] deg
+    min_range_m = 50.0         # global search interval (bearings/delays)
+    max_range_m = 20000.0      # also the half-width of the compact grid
+    seed = 0                   # differential evolution
+    outliers = true            # bearings: polynomial-residue outlier rejection
+    poly_degree = 5
+    outlier_k = 4.0
+    speed_mps = 7.3            # compact: assumed speed (required)
+    sigma_speed_mps = 1.0      # compact: speed prior σ in the bound (default 0: known)
+    correlation_s = 0.0        # compact: exponential correlation time of the bearing errors
+    n_grid = 200               # compact: grid nodes per axis
+    n_headings = 72            # compact: headings over 360°
+
+The observer of a bearing is the array's phase centre (mean element position) at its time;
+the delays use every element's world position in each snapshot's pose (``Recording.poses``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from typing import Any
+
+import numpy as np
+
+from arrayproc.config import Param, positive
+from arrayproc.errors import ConfigError, FormatError
+from arrayproc.io.products import ProductsWriter, read_products
+from arrayproc.io.recording import Recording
+
+from .bo_tma import solve_line_bearings
+from .compact import solve_compact
+from .result import TmaSolution
+from .td_tma import solve_delays
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements"]
+
+
+def _non_negative(v: Any) -> str | None:
+    return None if v >= 0 else f"must be >= 0, got {v}"
+
+
+def _gate(v: Any) -> str | None:
+    return None if len(v) == 2 and 0 <= v[0] < v[1] <= 180 else \
+        "must be [lo, hi] cone angles, deg, 0 <= lo < hi <= 180"
+
+
+PARAMS: dict[str, Param] = {
+    "method": Param("str", doc="bearings | delays | compact",
+                    choices=("bearings", "delays", "compact")),
+    "window": Param("float", 0.0, "s per solution; 0: the whole file", check=_non_negative),
+    "step": Param("float", 0.0, "s between window starts; 0: the window", check=_non_negative),
+    "sigma_bearing_deg": Param("float", 0.0, "bearing σ, deg; 0: estimated", check=_non_negative),
+    "sigma_delay_s": Param("float", 0.0, "delay σ, s; 0: product σ or estimated",
+                           check=_non_negative),
+    "group": Param("str", "", "products group to read"),
+    "recording": Param("str", "", "recording with /nav and /array"),
+    "side": Param("str", "auto", "mirror hypothesis", choices=("auto", "port", "starboard")),
+    "cone_gate": Param("band", None, "cone-angle gate, deg", check=_gate),
+    "min_range_m": Param("float", 50.0, "m", check=positive),
+    "max_range_m": Param("float", 20000.0, "m", check=positive),
+    "seed": Param("int", 0, "differential-evolution seed"),
+    "outliers": Param("bool", True, "polynomial-residue outlier rejection"),
+    "poly_degree": Param("int", 5, "outlier polynomial degree", check=_non_negative),
+    "outlier_k": Param("float", 4.0, "outlier threshold, σ", check=positive),
+    "speed_mps": Param("float", None, "compact: assumed speed, m/s", check=positive),
+    "sigma_speed_mps": Param("float", 0.0, "compact: speed prior σ, m/s", check=_non_negative),
+    "correlation_s": Param("float", 0.0, "compact: correlation time, s", check=_non_negative),
+    "n_grid": Param("int", 200, "compact: grid nodes per axis", check=positive),
+    "n_headings": Param("int", 72, "compact: headings", check=positive),
+    "popsize": Param("int", 20, "differential-evolution population factor", check=positive),
+    "maxiter": Param("int", 400, "differential-evolution generations", check=positive),
+}
+
+
+def load_tma_config(path: str) -> dict[str, Any]:
+    """Read and check a TMA TOML (``[tma]`` table); ConfigError naming the file and key.
+
+    Parameters
+    ----------
+    path : str
+        TOML file.
+
+    Returns
+    -------
+    dict
+        Every key of :data:`PARAMS`, defaults filled in.
+    """
+    try:
+        with open(path, "rb") as fh:
+            text = fh.read()
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot read TMA config: {e.strerror}") from None
+    try:
+        doc = tomllib.loads(text.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    if not isinstance(doc.get("tma"), dict):
+        raise ConfigError(f"{path}: missing [tma] table")
+    raw = doc["tma"]
+    cfg: dict[str, Any] = {}
+    for k in raw:
+        if k not in PARAMS:
+            raise ConfigError(f"{path}: unknown key tma.{k}")
+    for k, p in PARAMS.items():
+        if k in raw:
+            cfg[k] = p.convert(f"{path}: tma.{k}", raw[k])
+        elif p.required:
+            raise ConfigError(f"{path}: missing key tma.{k}")
+        else:
+            cfg[k] = p.default
+    if cfg["method"] == "compact" and cfg["speed_mps"] is None:
+        raise ConfigError(f"{path}: tma.speed_mps is required for method = 'compact'")
+    if cfg["min_range_m"] >= cfg["max_range_m"]:
+        raise ConfigError(f"{path}: tma.min_range_m must be below tma.max_range_m")
+    return cfg
+
+
+def _s(v: Any) -> str:
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _resolve(path: str, rel_to: str) -> str:
+    if os.path.isabs(path) or os.path.exists(path):
+        return path
+    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
+    return cand if os.path.exists(cand) else path
+
+
+def _group(prod: dict, kind: str, name: str, path: str) -> tuple[str, dict]:
+    if name:
+        if name not in prod or name == "/":
+            raise FormatError(f"{path}: no group {name!r} (tma.group)")
+        if _s(prod[name].get("kind")) != kind:
+            raise FormatError(f"{path}: group {name!r} is of kind "
+                              f"{_s(prod[name].get('kind'))!r}, not {kind!r}")
+        return name, prod[name]
+    names = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == kind]
+    if not names:
+        raise FormatError(f"{path}: no {kind} group")
+    if len(names) > 1:
+        raise ConfigError(f"{path}: several {kind} groups ({', '.join(names)}); choose one "
+                          "with tma.group")
+    return names[0], prod[names[0]]
+
+
+def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]:
+    """The measurements a method needs from a products file.
+
+    Bearings (one row per time, the strongest by ``snr_db``): ``time`` (s), ``cone`` and
+    ``heading`` (rad; heading = the port/starboard pair's mean, cone = half their
+    difference), ``port``, ``stbd`` (rad). Delays: ``time``, ``tau`` (n, n_ch) s, ``sigma``
+    (n, n_ch) s or None, ``reference``.
+
+    Parameters
+    ----------
+    products_path : str
+        Products file.
+    cfg : dict
+        Checked TMA configuration.
+
+    Returns
+    -------
+    dict
+        Also ``group`` (the name read) and ``source`` (the products' source attribute).
+    """
+    prod = read_products(products_path)
+    src = _s(prod["/"].get("source", ""))
+    kind = "delays" if cfg["method"] == "delays" else "bearings"
+    name, g = _group(prod, kind, cfg["group"], products_path)
+    out: dict[str, Any] = {"group": name, "source": src}
+    if kind == "delays":
+        for k in ("time", "tau"):
+            if k not in g:
+                raise FormatError(f"{products_path}: delays column {k!r} is missing")
+        t = np.asarray(g["time"], float).reshape(-1)
+        tau = np.asarray(g["tau"], float)
+        if tau.ndim != 2 or tau.shape[0] != t.size:
+            raise FormatError(f"{products_path}: delays 'tau' must be (n, n_ch) with n = "
+                              f"{t.size}")
+        sig = np.asarray(g["sigma"], float) if "sigma" in g else None
+        if sig is not None and sig.shape != tau.shape:
+            raise FormatError(f"{products_path}: delays 'sigma' shape {sig.shape} != tau "
+                              f"{tau.shape}")
+        order = np.argsort(t, kind="stable")
+        out.update(time=t[order], tau=tau[order], sigma=None if sig is None else sig[order],
+                   reference=int(g["attrs"].get("reference", 0)))
+        return out
+    for k in ("time", "bearing_port_deg", "bearing_stbd_deg"):
+        if k not in g:
+            raise FormatError(f"{products_path}: bearings column {k!r} is missing")
+    t = np.asarray(g["time"], float).reshape(-1)
+    port = np.asarray(g["bearing_port_deg"], float).reshape(-1)
+    stbd = np.asarray(g["bearing_stbd_deg"], float).reshape(-1)
+    ok = np.isfinite(t) & np.isfinite(port) & np.isfinite(stbd)
+    if cfg["cone_gate"] is not None:
+        if "cone_deg" not in g:
+            raise FormatError(f"{products_path}: bearings column 'cone_deg' is missing "
+                              "(needed by tma.cone_gate)")
+        cone = np.asarray(g["cone_deg"], float).reshape(-1)
+        ok &= (cone >= cfg["cone_gate"][0]) & (cone <= cfg["cone_gate"][1])
+    score = np.asarray(g.get("snr_db", g.get("level_db", np.zeros(t.size))), float).reshape(-1)
+    score = np.where(np.isfinite(score), score, -np.inf)
+    idx = np.flatnonzero(ok)
+    idx = idx[np.lexsort((-score[idx], t[idx]))]          # by time, strongest first
+    first = np.ones(idx.size, bool)
+    first[1:] = t[idx][1:] != t[idx][:-1]
+    idx = idx[first]                                        # one row per time
+    if idx.size < 5:
+        raise FormatError(f"{products_path}: fewer than 5 usable bearing rows in {name!r}")
+    p, s = np.deg2rad(port[idx]), np.deg2rad(stbd[idx])
+    cone = np.mod(s - p, 2 * np.pi) / 2                     # stbd − port = 2θ
+    out.update(time=t[idx], port=p, stbd=s, cone=cone, heading=p + cone)
+    return out
+
+
+def _windows(t: np.ndarray, window: float, step: float) -> list[tuple[float, float]]:
+    if window <= 0:
+        return [(float(t[0]), float(t[-1]))]
+    step = step if step > 0 else window
+    out = []
+    start = float(t[0])
+    while start < t[-1]:
+        out.append((start, min(start + window, float(t[-1]))))
+        if start + window >= t[-1]:
+            break
+        start += step
+    return out
+
+
+def _solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) -> TmaSolution:
+    t = meas["time"]
+    sel = (t >= w0) & (t <= w1)
+    ts = t[sel]
+    common = dict(seed=cfg["seed"], t0=w0, t1=w1)
+    if cfg["method"] == "delays":
+        poses = rec.poses(ts)
+        elem = np.stack([p.elements[:, :2] for p in poses])
+        tau = meas["tau"][sel]
+        if tau.shape[1] != elem.shape[1]:
+            raise FormatError(f"delays have {tau.shape[1]} channels but the recording "
+                              f"{rec.path} has {elem.shape[1]} active channels")
+        if cfg["sigma_delay_s"] > 0:
+            sig = cfg["sigma_delay_s"]
+        elif meas["sigma"] is not None:
+            s = meas["sigma"][sel]
+            sig = np.where(np.isfinite(s) & (s > 0), s, np.inf)
+        else:
+            sig = None
+        return solve_delays(ts, tau, elem, sig, ref=meas["reference"],
+                            sound_speed=rec.sound_speed, side=cfg["side"],
+                            heading_rad=np.deg2rad([p.heading for p in poses]),
+                            min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
+                            popsize=cfg["popsize"], maxiter=cfg["maxiter"], **common)
+    poses = rec.poses(ts)
+    obs = np.stack([p.elements[:, :2].mean(0) for p in poses])     # phase centre
+    sig = np.deg2rad(cfg["sigma_bearing_deg"]) or None
+    if cfg["method"] == "compact":
+        port, stbd = meas["port"][sel], meas["stbd"][sel]
+        same = np.allclose(np.angle(np.exp(1j * (port - stbd))), 0.0, atol=1e-9)
+        if same or cfg["side"] == "starboard":
+            y = stbd
+        elif cfg["side"] == "port":
+            y = port
+        else:
+            raise ConfigError("tma.side must be 'port' or 'starboard' for method = 'compact' "
+                              "on a line array's bearings (their port and starboard differ)")
+        return solve_compact(ts, y, obs.mean(0), sig, speed_mps=cfg["speed_mps"],
+                             sigma_speed_mps=cfg["sigma_speed_mps"],
+                             correlation_s=cfg["correlation_s"], t0=w0, t1=w1,
+                             max_range_m=cfg["max_range_m"], n_grid=cfg["n_grid"],
+                             n_headings=cfg["n_headings"])
+    kw = dict(min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
+              outliers=cfg["outliers"], poly_degree=cfg["poly_degree"],
+              outlier_k=cfg["outlier_k"], popsize=cfg["popsize"], maxiter=cfg["maxiter"],
+              **common)
+    return solve_line_bearings(ts, meas["cone"][sel], meas["heading"][sel], obs, sig,
+                               side=cfg["side"], **kw)
+
+
+def run_tma(products_path: str, config_path: str, output_path: str,
+            progress: bool = False) -> list[TmaSolution]:
+    """Solve batch TMA over a products file's measurements and write a ``tma`` group.
+
+    Parameters
+    ----------
+    products_path : str
+        Products file with a ``bearings`` or ``delays`` group.
+    config_path : str
+        TMA TOML (see the module docstring).
+    output_path : str
+        Products file to write (one ``tma`` group named ``tma``).
+    progress : bool
+        One line per solution on stderr.
+
+    Returns
+    -------
+    list of TmaSolution
+    """
+    cfg = load_tma_config(config_path)
+    meas = read_measurements(products_path, cfg)
+    rec_path = cfg["recording"] or meas["source"]
+    if not rec_path:
+        raise ConfigError(f"{config_path}: tma.recording is needed (the products file names "
+                          "no source recording)")
+    rec_path = _resolve(rec_path, products_path if not cfg["recording"] else config_path)
+    sols = []
+    with Recording(rec_path) as rec:
+        for w0, w1 in _windows(meas["time"], cfg["window"], cfg["step"]):
+            n = int(np.sum((meas["time"] >= w0) & (meas["time"] <= w1)))
+            if n < 5:
+                continue
+            try:
+                sol = _solve_window(meas, rec, cfg, w0, w1)
+            except ValueError as e:
+                raise FormatError(f"{products_path}: window [{w0:g}, {w1:g}] s: {e}") from None
+            sols.append(sol)
+            if progress:
+                print(f"tma {cfg['method']} [{w0:8.1f}, {w1:8.1f}] s: x {sol.state[0]:9.1f} "
+                      f"y {sol.state[1]:9.1f} m, course {sol.heading_deg:5.1f} deg, speed "
+                      f"{sol.speed_mps:5.2f} m/s, range σ {sol.range_sigma:8.1f} m",
+                      file=sys.stderr)
+    if not sols:
+        raise FormatError(f"{products_path}: no window with 5 or more measurements")
+    with ProductsWriter(output_path, source=rec_path,
+                        attrs={"products": os.path.abspath(products_path)}) as w:
+        g = w.group("tma", "tma", stage="tma", method=cfg["method"], measurements=meas["group"],
+                    products=os.path.abspath(products_path), recording=rec_path,
+                    side=",".join(s.side for s in sols),
+                    sigma_bearing_deg=cfg["sigma_bearing_deg"],
+                    sigma_delay_s=cfg["sigma_delay_s"])
+        g.append(
+            t0=np.array([s.t0 for s in sols]), t1=np.array([s.t1 for s in sols]),
+            method=np.array([s.method.encode() for s in sols], dtype="S8"),
+            x=np.array([s.state[0] for s in sols]), y=np.array([s.state[1] for s in sols]),
+            vx=np.array([s.state[2] for s in sols]), vy=np.array([s.state[3] for s in sols]),
+            cov=np.stack([s.cov for s in sols]), crlb=np.stack([s.crlb for s in sols]),
+            cost=np.array([s.cost for s in sols]),
+            fim_cond=np.array([s.fim_cond if math.isfinite(s.fim_cond) else np.inf
+                               for s in sols]),
+            heading_deg=np.array([s.heading_deg for s in sols]),
+            speed_mps=np.array([s.speed_mps for s in sols]),
+            range_sigma_m=np.array([s.range_sigma for s in sols]),
+            cost_mirror=np.array([s.cost_other for s in sols]))
+    return sols
