@@ -69,7 +69,8 @@ else:  # pragma: no cover
 MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
               "pd", "clutter_density", "bearing", "contacts", "positions"}
 _SUB = {
-    "bearing": {"sigma_cone_deg": 0.7, "q_cone": 0.05, "merge_deg": 4.0,
+    "bearing": {"space": "bearing", "sigma_cone_deg": 0.7, "q_cone": 0.05,
+                "q_bearing": 0.002, "turn_ref_deg_s": 0.1, "merge_deg": 4.0,
                 "sigma_rate_deg_s": 0.5, "merge_d2": 4.0, "min_sigma_sin": 0.2},
     "contacts": {"sigma_bearing_deg": 2.0, "sigma_range_m": 20.0, "sigma_range_rate_mps": 0.3,
                  "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True},
@@ -152,6 +153,11 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
             if isinstance(defaults[k], bool):
                 if not isinstance(v, bool):
                     raise ConfigError(f"{path}: tracker.{sub}.{k} must be true or false")
+                vals[k] = v
+            elif k == "space":
+                if v not in ("cone", "bearing"):
+                    raise ConfigError(f"{path}: tracker.bearing.space must be 'cone' or "
+                                      f"'bearing', not {v!r}")
                 vals[k] = v
             else:
                 vals[k] = _num(path, f"{sub}.{k}", v)
@@ -239,27 +245,52 @@ def cone_filter(bcfg: dict[str, Any]) -> KalmanBatch:
     return KalmanBatch(ConstantVelocity(1, float(bcfg["q_cone"])), np.array([[1.0, 0.0]]), R)
 
 
-def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str, Any]
-                ) -> list[Track]:
-    """Run the track manager over bearing scans in cone-angle space. The context of each scan
-    is its Z (the measurement noise depends on the cone angle); ``meta['rows']`` of every
-    track holds the products row of each history point (−1: coasted)."""
+def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str, Any],
+                nav: Nav | None = None) -> list[Track]:
+    """Run the track manager over bearing scans (Z (m, 3): cone, port and starboard bearings,
+    deg). ``bearing.space = "cone"``: one cone / cone-rate filter per track (the context of
+    each scan is its Z, the noise depends on the cone angle); ``"bearing"``: mirrored
+    true-bearing hypotheses (:mod:`arrayproc.track.manage.mirrored`, needs ``nav``).
+    ``meta['rows']`` of every track holds the products row of each history point (−1:
+    coasted), ``meta['cone']``, ``meta['sigma_cone']`` and ``meta['stbd_weight']`` its cone
+    angle (deg), σ and starboard weight (NaN in cone space)."""
+    from arrayproc.track.manage.mirrored import MirroredBearingBatch
+    from arrayproc.track.runner import ownship_states
+
     b = cfg["bearing"]
-    filt = cone_filter(b)
     s0, sr, smin = float(b["sigma_cone_deg"]), float(b["sigma_rate_deg_s"]), \
         float(b["min_sigma_sin"])
+    mirrored = b["space"] == "bearing"
+    if mirrored and nav is None:
+        raise ConfigError("tracker.bearing.space = 'bearing' needs the array's navigation")
+    if mirrored:
+        filt: Any = MirroredBearingBatch(float(b["q_bearing"]), s0, smin)
 
-    def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
-        s = s0 / max(math.sin(math.radians(float(Z[j, 0]))), smin)
-        return np.array([Z[j, 0], 0.0]), np.diag([s * s, sr * sr])
+        def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
+            return MirroredBearingBatch.initial(Z, j, s0, smin, sr)
+        pos: tuple[int, ...] = (0, 1, 2, 3)  # rates too: mirror pairs cross in cone
+        ts = np.array([t for t, _Z, _r in scans])
+        _own, hd = ownship_states(nav, ts)
+        rate = np.abs(np.gradient(np.unwrap(hd), ts)) if ts.size > 1 else np.zeros(1)
+        qmul = 1.0 + (np.degrees(rate) / float(b["turn_ref_deg_s"])) ** 2
+    else:
+        filt = cone_filter(b)
+
+        def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
+            s = s0 / max(math.sin(math.radians(float(Z[j, 0]))), smin)
+            return np.array([Z[j, 0], 0.0]), np.diag([s * s, sr * sr])
+        pos = (0,)
 
     mgr = TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
                        confirm=cfg["confirm"],
-                       delete=DeletionRule(max_misses=cfg["max_misses"], pos=(0,),
+                       delete=DeletionRule(max_misses=cfg["max_misses"], pos=pos,
                                            merge_d2=float(b["merge_d2"])),
                        pd=cfg["pd"], clutter_density=cfg["clutter_density"])
-    for t, Z, _rows in scans:
-        mgr.step(t, Z, Z)
+    for k, (t, Z, _rows) in enumerate(scans):
+        if mirrored:
+            mgr.step(t, Z, float(qmul[k]))
+        else:
+            mgr.step(t, Z[:, :1], Z[:, :1])
     scan_rows = {t: r for t, _Z, r in scans}
     for tr in mgr.tracks:
         h = tr.arrays()
@@ -269,13 +300,22 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
             if j >= 0:
                 rows[k] = scan_rows[float(tk)][j]
         tr.meta["rows"] = rows
+        if mirrored:
+            _o, hh = ownship_states(nav, h["time"])
+            c, sc, ws = MirroredBearingBatch.cone(h["x"], h["P"], np.degrees(hh))
+        else:
+            c, sc = h["x"][:, 0], np.sqrt(np.clip(h["P"][:, 0, 0], 0, None))
+            ws = np.full(c.size, np.nan)
+        tr.meta["cone"], tr.meta["sigma_cone"], tr.meta["stbd_weight"] = c, sc, ws
     return mgr.tracks
 
 
-def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, Any]
-              ) -> dict[str, np.ndarray] | None:
+def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, Any],
+              by_side: bool = False) -> dict[str, np.ndarray] | None:
     """TMA of one cone track: its rows' port/starboard bearings through the configured filter
-    (UKF with left-right resolution by default) from its first row; between rows (coasting)
+    (UKF with left-right resolution by default) from its first row — the two hypotheses fed
+    by side (``by_side``, starboard and port members) or by continuity
+    (:func:`~arrayproc.track.runner.assign_by_continuity`); between rows (coasting)
     the state is predicted with constant velocity. Returns the rows to write, or None when the
     track has fewer than two rows."""
     from arrayproc.track.runner import assign_by_continuity, ownship_states, track_bearings
@@ -290,7 +330,9 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
     own, hd = ownship_states(nav, t)
     port = np.deg2rad(b["bearing_port_deg"][r])
     stbd = np.deg2rad(b["bearing_stbd_deg"][r])
-    if tma_cfg["lr"]:
+    if tma_cfg["lr"] and by_side:
+        zs = np.stack([stbd, port], 1)  # hypothesis 0 starboard, 1 port, as in the cone track
+    elif tma_cfg["lr"]:
         zs = assign_by_continuity(port, stbd)
     else:
         zs = (port if tma_cfg["side"] == "port" else stbd)[:, None]
@@ -322,11 +364,10 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
     F[:, 0, 2] = F[:, 1, 3] = dt
     P = F @ Pk[last] @ F.transpose(0, 2, 1)
     own_h, _ = ownship_states(nav, th)
-    sig = np.sqrt(np.clip(h["P"][keep, 0, 0], 0, None))
     return {"time": th, "x": X[:, 0], "y": X[:, 1], "vx": X[:, 2], "vy": X[:, 3], "cov": P,
             "status": h["status"][keep], "side_weight": side_w[last],
-            "own_x": own_h[:, 0], "own_y": own_h[:, 1], "cone_deg": h["x"][keep, 0],
-            "sigma_cone_deg": sig, "row": rows[keep]}
+            "own_x": own_h[:, 0], "own_y": own_h[:, 1], "cone_deg": tr.meta["cone"][keep],
+            "sigma_cone_deg": tr.meta["sigma_cone"][keep], "row": rows[keep]}
 
 
 # ----------------------------------------------------------------------------- contacts
@@ -467,10 +508,12 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
         scans = bearing_scans(b["time"][idx], b["cone_deg"][idx],
                               np.where(np.isfinite(score[idx]), score[idx], -np.inf),
                               float(cfg["bearing"]["merge_deg"]))
-        scans = [(t, Z, idx[r]) for t, Z, r in scans]
-        tracks = track_cones(scans, cfg)
+        scans = [(t, np.stack([b["cone_deg"][idx[r]], b["bearing_port_deg"][idx[r]],
+                               b["bearing_stbd_deg"][idx[r]]], 1), idx[r])
+                 for t, _Z, r in scans]
+        tracks = track_cones(scans, cfg, nav)
         for tr in tracks:
-            rows = tma_track(tr, b, nav, tma_cfg)
+            rows = tma_track(tr, b, nav, tma_cfg, by_side=cfg["bearing"]["space"] == "bearing")
             if rows is not None:
                 out.append(rows)
             else:
