@@ -233,11 +233,12 @@ def simulate(scenario: str, output: str, seed: int | None = None,
 
 
 # -- plot -------------------------------------------------------------------------------------
-PLOT_PRIORITY = ("tracks", "btr", "lofar", "contacts", "bearings")
+PLOT_PRIORITY = ("tracks", "tma", "btr", "lofar", "contacts", "bearings")
 
 
 def default_plot_kind(path: str) -> str:
-    """The plot kind for a products file: the first of tracks, btr, lofar, contacts, bearings."""
+    """The plot kind for a products file: the first of tracks, tma, btr, lofar, contacts,
+    bearings."""
     from arrayproc.io.products import product_kinds
     kinds = product_kinds(path)
     for k in PLOT_PRIORITY:
@@ -412,6 +413,30 @@ def _products_source(products: str) -> str | None:
     return None
 
 
+# -- tma --------------------------------------------------------------------------------------
+def tma(products: str, config: str, output: str, progress: bool = False) -> None:
+    """Batch maximum-likelihood TMA with its CRLB (thesis 3.3; compact-array paper eqs. 1-5).
+
+    Parameters
+    ----------
+    products : str
+        Products HDF5 file with a bearings or delays group.
+    config : str
+        TMA TOML file (``[tma] method = "bearings" | "delays" | "compact"``, …).
+    output : str
+        Products HDF5 file to write (one ``tma`` group).
+    progress : bool
+        One line per solution on stderr.
+    """
+    inputs = [products, config]
+    rec = _products_source(products)
+    if rec is not None:
+        inputs.append(rec)  # the recording whose navigation and geometry are read
+    check_output(output, inputs)
+    from arrayproc.track.batch.run import run_tma
+    run_tma(products, config, output, progress=progress)
+
+
 # -- export -----------------------------------------------------------------------------------
 def export(files: Sequence[str], to: str, output: str,
            origin: tuple[float, float] = (0.0, 0.0)) -> int:
@@ -545,6 +570,12 @@ def _run_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_tma(args: argparse.Namespace) -> int:
+    tma(args.products, args.config, args.output, progress=progress_wanted(args))
+    print(f"{args.output}: tma written")
+    return 0
+
+
 def _run_export(args: argparse.Namespace) -> int:
     n = export(args.files, args.to, args.output, origin=tuple(args.origin))
     print(f"{args.output}: {n} {'selections' if args.to == 'raven' else 'lines'} written")
@@ -616,6 +647,14 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--no-progress", action="store_true")
     s.set_defaults(func=_run_track)
+
+    s = sub.add_parser("tma", help="batch ML target motion analysis (bearings, delays or "
+                       "compact) with Cramér-Rao bounds")
+    s.add_argument("products")
+    s.add_argument("-c", "--config", required=True, help="TMA TOML file")
+    s.add_argument("-o", "--output", required=True, help="products HDF5 file to write")
+    s.add_argument("--no-progress", action="store_true")
+    s.set_defaults(func=_run_tma)
 
     s = sub.add_parser("export", help="write Raven selection tables or Debrief REP files")
     s.add_argument("files", nargs="+", help="products files (raven: in time order) or one "
