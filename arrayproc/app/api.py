@@ -60,7 +60,8 @@ def _load_types(config: Any) -> None:
     """Import only the stage modules the chain names (start-up stays short)."""
     tables = config.get("stage", []) if isinstance(config, Mapping) else []
     if isinstance(tables, list):
-        _load(t.get("type") for t in tables if isinstance(t, Mapping))
+        _load(t.get("type") for t in tables
+              if isinstance(t, Mapping) and isinstance(t.get("type"), str))
 
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,

@@ -32,6 +32,8 @@ class WavInfo:
     is_float: bool
     data_offset: int
     n_frames: int
+    #: Frames the header declares but the file does not hold (a truncated file), else 0.
+    missing_frames: int = 0
 
     @property
     def frame_bytes(self) -> int:
@@ -85,10 +87,15 @@ def read_wav_info(path: str | os.PathLike) -> WavInfo:
                     raise FormatError(f"{path}: unsupported float bit depth {bits}")
                 if nch < 1 or fs < 1:
                     raise FormatError(f"{path}: WAV header has {nch} channels at {fs} Hz")
-                if size == 0xFFFFFFFF or offset + size > size_total:  # RF64 / truncated
-                    size = size_total - offset
                 frame = nch * bits // 8
-                return WavInfo(path, fs, nch, bits, tag == _FLOAT, offset, size // frame)
+                missing = 0
+                if size == 0xFFFFFFFF:  # RF64 / streamed: the data runs to the end
+                    size = size_total - offset
+                elif offset + size > size_total:  # truncated: keep what is there, say so
+                    missing = -(-(offset + size - size_total) // frame)
+                    size = size_total - offset
+                return WavInfo(path, fs, nch, bits, tag == _FLOAT, offset, size // frame,
+                               missing)
             else:
                 f.seek(size + (size % 2), 1)
 
@@ -139,6 +146,10 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
         if (i.bits, i.is_float) != (ref.bits, ref.is_float):
             raise FormatError(f"{i.path}: sample format {i.kind} differs from {ref.path.name} "
                               f"({ref.kind})")
+    for i in infos:
+        if i.missing_frames and warn is not None:
+            warn(f"{i.path}: truncated WAV: the header declares {i.n_frames + i.missing_frames} "
+                 f"samples, the file holds {i.n_frames}; importing those")
     n = min(i.n_frames for i in infos)
     longer = [f"{i.path.name} (+{i.n_frames - n} samples)" for i in infos if i.n_frames > n]
     if longer and warn is not None:
