@@ -18,7 +18,7 @@ BODY = np.array([[-0.86, -0.86, -0.67], [-0.86, -0.86, 0.48], [0.86, -0.86, -0.6
                  [0.0, 0.0, 0.0], [-0.86, 0.86, -0.67], [0.86, 0.86, 0.67]])
 
 
-def _pulses(rng, n, events, band=(200.0, 4000.0), amp=30.0):
+def _pulses(rng, n, events, band=(200.0, 4000.0), amp=30.0, elements=BODY):
     """Recording samples (n, 6): Hann-tapered white pulses (20 ms) from body-frame positions
     at the given emission times, exact delays, unit white noise."""
     f = np.fft.rfftfreq(n, 1 / FS)
@@ -29,7 +29,7 @@ def _pulses(rng, n, events, band=(200.0, 4000.0), amp=30.0):
         p = np.zeros(n)
         p[:m] = rng.standard_normal(m) * np.hanning(m) * amp
         P = np.fft.rfft(p) * inb
-        r = np.linalg.norm(BODY - src, axis=1)
+        r = np.linalg.norm(elements - src, axis=1)
         for ch in range(6):
             x[:, ch] += np.fft.irfft(P * np.exp(-2j * np.pi * f * (t_emit + r[ch] / C)), n) \
                 / r[ch]
@@ -156,3 +156,47 @@ def test_detector_streaming_equals_whole():
 def test_detector_ignores_stationary_noise():
     x = np.random.default_rng(3).standard_normal(80000)
     assert detect_transients(x, 8000.0, (300.0, 1500.0), threshold_db=10.0) == []
+
+
+def test_unwrap_method_agrees_with_xcorr(products, tmp_path):
+    """method = "unwrap" runs on event blocks; its delays follow the GCC's to tens of µs (it is
+    the worse estimator: docs/validation/delays.md, fig. 3.16) and respect the lag limit."""
+    p, _, _ = products
+    rng = np.random.default_rng(0)
+    srcs = [np.array([2.0, 1.0, 0.5]), np.array([-3.0, 2.0, -1.0]), np.array([1.5, -2.5, 1.0])]
+    x = _pulses(rng, int(3.0 * FS), list(zip([0.01, 1.2, 2.93], srcs)))
+    with RecordingWriter(tmp_path / "r.h5", FS, 6, positions=BODY, sound_speed=C) as w:
+        w.append(x.astype(np.float32))
+    text = CHAIN.replace('band = [200.0, 4000.0]\n\n[[stage]]\ntype = "localise"',
+                         'band = [200.0, 4000.0]\nmethod = "unwrap"\n\n[[stage]]\n'
+                         'type = "localise"')
+    assert 'method = "unwrap"' in text
+    with Recording(tmp_path / "r.h5") as rec, ProductsWriter(tmp_path / "p.h5") as pw:
+        run_chain(rec, build_chain(text), pw)
+    d = read_products(tmp_path / "p.h5")["tde"]
+    diff = np.abs(d["tau"] - p["tde"]["tau"])
+    assert np.median(diff) < 2e-5
+    assert np.all(np.abs(d["tau"]) <= np.linalg.norm(BODY - BODY[3], axis=1) / C + 1e-4 + 1e-12)
+
+
+def test_planar_array_falls_back_to_directions(tmp_path):
+    """A horizontal planar array: no 3-D positions, a bearing per event instead."""
+    plane = np.array([[0.8, 0.0, 0.0], [-0.8, 0.0, 0.0], [0.0, 0.8, 0.0], [0.0, -0.8, 0.0],
+                      [0.0, 0.0, 0.0], [0.5, 0.5, 0.0]])
+    rng = np.random.default_rng(4)
+    src_body = np.array([40.0, 30.0, 5.0])  # far: a plane wave
+    x = _pulses(rng, int(1.5 * FS), [(0.5, src_body)], amp=2000.0, elements=plane)
+    with RecordingWriter(tmp_path / "r.h5", FS, 6, positions=plane, sound_speed=C) as w:
+        w.append(x.astype(np.float32))
+    text = CHAIN.replace("channel = 3", "channel = 4").replace("reference = 3", "reference = 4")
+    with Recording(tmp_path / "r.h5") as rec, ProductsWriter(tmp_path / "p.h5") as pw:
+        run_chain(rec, build_chain(text), pw)
+        world = np.asarray(rec.pose(0.0).elements)
+    A, *_ = np.linalg.lstsq(np.c_[plane, np.ones(6)], world, rcond=None)
+    u = (np.r_[src_body, 1.0] @ A) - (np.r_[0, 0, 0, 1.0] @ A)
+    want = np.degrees(np.arctan2(u[0], u[1])) % 360
+    g = read_products(tmp_path / "p.h5")
+    assert "localise" not in g or "x" not in g["localise"]
+    dirs = g["localise_directions"]
+    assert len(dirs["bearing_deg"]) == 1
+    assert abs((dirs["bearing_deg"][0] - want + 180) % 360 - 180) < 1.0
