@@ -299,9 +299,9 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
         raise ConfigError(f"--workers must be >= 1, got {n}")
     t = threads or worker_threads(n)
     env = {v: str(t) for v in THREAD_VARS}
-    dashboard = ":0" if _has_bokeh() else None
+    # a free port: the scheduler's HTTP server (and the dashboard, with bokeh) always runs
     cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                       env=env, dashboard_address=dashboard,
+                                       env=env, dashboard_address=":0",
                                        silence_logs=40)
     return distributed.Client(cluster), cluster
 

@@ -81,6 +81,83 @@ def spread(fn: Callable[..., Any], runs: int, seed: int, client: Any = None, chu
     return client.gather(futures)
 
 
+def spread_slices(fn: Callable[..., Any], n: int, client: Any = None, chunk: int = 50,
+                  **kwargs: Any) -> list[Any]:
+    """Call ``fn(lo, hi, **kwargs)`` for consecutive slices ``[lo, hi)`` of ``n`` items (at
+    most ``chunk`` each), on ``client``'s workers or here; the results in slice order. For
+    runs whose random streams are already keyed by run index (e.g.
+    :func:`arrayproc.track.filters.particle.run_seeds`), the combined result equals one
+    unsplit run's.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function, ``fn(lo, hi, **kwargs)``.
+    n : int
+        Items (runs).
+    client : distributed.Client, optional
+        Where the slices run.
+    chunk : int
+        Items per slice.
+    **kwargs
+        Passed to ``fn`` (shipped once per task: keep them to the arrays the runs need).
+
+    Returns
+    -------
+    list
+        ``fn``'s results, in slice order.
+    """
+    bounds = [(lo, min(n, lo + chunk)) for lo in range(0, n, chunk)]
+    if client is None:
+        return [fn(lo, hi, **kwargs) for lo, hi in bounds]
+    if kwargs:
+        shared = client.scatter(kwargs, broadcast=True)  # sent to each worker once
+        futures = [client.submit(_call_with, fn, lo, hi, shared, pure=False, retries=2)
+                   for lo, hi in bounds]
+    else:
+        futures = [client.submit(fn, lo, hi, pure=False, retries=2) for lo, hi in bounds]
+    return client.gather(futures)
+
+
+def _call_with(fn: Callable[..., Any], lo: int, hi: int, kwargs: dict) -> Any:
+    return fn(lo, hi, **kwargs)
+
+
+def rpf_slice(lo: int, hi: int, config: Any, times: np.ndarray, observer_pos: np.ndarray,
+              bearings_deg: np.ndarray, levels_db: np.ndarray | None,
+              seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Runs ``lo..hi`` of the SPL paper's regularised particle filter (section 4): estimates
+    (R, K, 4) and resampling flags (R, K), each run on its own seed ``seeds[r]``.
+
+    Parameters
+    ----------
+    lo, hi : int
+        Run slice.
+    config : RPFConfig
+        Filter settings.
+    times : (K,) array
+        Measurement times, s.
+    observer_pos : (K, 2) array
+        Observer positions, m.
+    bearings_deg : (R_all, K) array
+        Bearings, deg.
+    levels_db : (R_all, K) array or None
+        Received levels, dB (None: bearings only).
+    seeds : (R_all,) uint64 array
+        Per-run seeds.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        ``est`` (hi − lo, K, 4) and ``resampled`` (hi − lo, K).
+    """
+    from arrayproc.track.filters.particle import RegularizedParticleFilter
+    f = RegularizedParticleFilter(config)
+    res = f.run_many(times, observer_pos, bearings_deg[lo:hi],
+                     None if levels_db is None else levels_db[lo:hi], seeds=seeds[lo:hi])
+    return res.est, res.resampled
+
+
 def lr_chunk(n_runs: int, seed: int, case: int, filters: Sequence[str], params: dict,
              truth_noise: bool = False, threads: int = 1) -> dict[str, dict[str, Any]]:
     """One chunk of the L-R table: for each filter, the per-run quantities of the known-side
