@@ -44,6 +44,12 @@ class Transients(Stage):
                      "time across the array plus one frame)"),
     }
 
+    def warmup_seconds(self, fs: float) -> float:
+        """A segment needs the background window's half, the longest event and its padding
+        before its start to detect as one long run does."""
+        pad = self.pad if self.pad is not None else 0.01 + self.nfft / fs
+        return self.background / 2 + self.max_duration + self.merge_gap + pad
+
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         out = self.products("detections")
         det = None
@@ -51,10 +57,9 @@ class Transients(Stage):
         buf0 = 0
         pending: list = []
         n_ev = 0
-        first = None
+        last = None
         for b in blocks:
             if det is None:
-                first = b
                 n_ch = b.data.shape[1]
                 if not 0 <= self.channel < n_ch:
                     raise ConfigError(f"stage {self.name!r}: key 'channel': {self.channel} "
@@ -77,8 +82,9 @@ class Transients(Stage):
             pending += det.push(x[:, self.channel])
             ready, pending = self._ready(pending, buf0 + buf.shape[0], b.fs, pad_n)
             for ev in ready:
-                yield self._event(ev, buf, buf0, b, pad_n, n_ev, out, first)
+                yield self._event(ev, buf, buf0, b, pad_n, n_ev, out)
                 n_ev += 1
+            last = b
             if buf.shape[0] > keep_n:
                 drop = buf.shape[0] - keep_n
                 buf = buf[drop:]
@@ -87,7 +93,7 @@ class Transients(Stage):
             return
         pending += det.push(np.zeros(0), final=True)
         for ev in pending:
-            yield self._event(ev, buf, buf0, first, pad_n, n_ev, out, first)
+            yield self._event(ev, buf, buf0, last, pad_n, n_ev, out)
             n_ev += 1
 
     @staticmethod
@@ -95,7 +101,9 @@ class Transients(Stage):
         ready = [e for e in pending if int(np.ceil(e.time_end * fs)) + pad_n <= end_sample]
         return ready, [e for e in pending if e not in ready]
 
-    def _event(self, ev, buf, buf0, b, pad_n, n_ev, out, first) -> Block:
+    def _event(self, ev, buf, buf0, b, pad_n, n_ev, out) -> Block:
+        """The event block of ``ev``, with the positions and pose of block ``b`` (the block
+        whose arrival completed the event)."""
         fs = b.fs
         s0 = max(buf0, int(np.floor(ev.time_start * fs)) - pad_n)
         s1 = min(buf0 + buf.shape[0], int(np.ceil(ev.time_end * fs)) + pad_n)
@@ -106,5 +114,5 @@ class Transients(Stage):
                        snr_db=np.array([ev.snr_db]), channel=np.array([self.channel]))
         meta = EventMeta(n_ev, s0, ev.time_start, ev.time_end, ev.freq_lo, ev.freq_hi,
                          ev.snr_db, self.channel)
-        return Block(data, Domain.EVENT, s0 / fs, data.shape[0] / fs, fs, first.positions,
-                     first.pose, index=n_ev, meta=meta)
+        return Block(data, Domain.EVENT, s0 / fs, data.shape[0] / fs, fs, b.positions,
+                     b.pose, index=n_ev, meta=meta)
