@@ -44,7 +44,7 @@ class MemRecording:
         self.n_samples = x.shape[0]
         self.sound_speed = 1500.0
         self.path = "<memory>"
-        self._pose = Pose(np.zeros(2), 180.0, 80.0, 3.0, positions)
+        self._pose = Pose(np.zeros(2), 180.0, 80.0, 0.0, positions)  # still: the echo too
 
     def active(self):
         return self._act

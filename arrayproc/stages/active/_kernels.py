@@ -88,7 +88,7 @@ def _ca_row_interior(row: np.ndarray, cs: np.ndarray, g: int, t: int, mode: int,
         else:
             est = min(s1, s2) * inv_t
             thr = a_half * est
-        if x > thr:
+        if x > thr and est > 0.0:
             if n < cap:
                 rows[n] = d
                 cols[n] = r
@@ -128,7 +128,8 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
     SO the larger / smaller of the means of the lead (columns < r) and lag (columns > r) halves
     when both hold ``half_n`` cells (else CA); OS the ``os_k[N]``-th smallest training cell.
     Threshold ``alpha * estimate`` with ``alpha = alpha_n[N]`` (CA, OS and edge cells) or
-    ``alpha_half`` (GO/SO interior). Only columns r0 <= r < r1 are tested.
+    ``alpha_half`` (GO/SO interior). Only columns r0 <= r < r1 are tested; a cell whose noise
+    estimate is 0 (training cells of exact zeros, e.g. past the data) is never detected.
 
     Writes detections into rows/cols/vals/noise (capacity = their length) and returns their
     count, or -(count needed) when the capacity is too small (nothing useful written then).
@@ -201,7 +202,7 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
                 for i in range(m):
                     if buf[i] < lim:
                         cnt += 1
-                if cnt >= k:
+                if cnt >= k and _kth(buf, m, k) > 0.0:
                     if n < cap:
                         rows[n] = d
                         cols[n] = r
@@ -220,7 +221,7 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
             else:
                 est = (s_lead + s_lag + s_mid) / ntot
                 a = alpha_n[ntot]
-            if x > a * est:
+            if x > a * est and est > 0.0:
                 if n < cap:
                     rows[n] = d
                     cols[n] = r

@@ -286,5 +286,5 @@ def cluster(det: Detections, p: np.ndarray) -> list[Cluster]:
         dr = _interp(p[d - 1, x], p[d, x], p[d + 1, x]) if 0 < d < nd - 1 else 0.0
         dc = _interp(p[d, x - 1], p[d, x], p[d, x + 1]) if 0 < x < nr - 1 else 0.0
         out.append(Cluster(d + dr, x + dc, float(val[m]), float(nse[m]), idx.size, d, x))
-    out.sort(key=lambda cl: -cl.peak / cl.noise)
+    out.sort(key=lambda cl: -cl.peak / max(cl.noise, 1e-300))
     return out

@@ -73,6 +73,8 @@ class ActiveBeams(Stage):
         s0 = int(round(tp * fs))
         n_pulse = int(np.ceil(wf.duration * fs)) + 1
         n_lag = max(1, int(round(span * fs)))
+        # lags whose whole echo lies inside the recording
+        n_lag = max(1, min(n_lag, n_total - s0 - n_pulse))
         return s0, n_lag + n_pulse, n_lag
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
