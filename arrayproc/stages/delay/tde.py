@@ -4,7 +4,9 @@ Per event block (from ``transients``) or per regular snapshot of ``nfft`` sample
 (time blocks, for towed arrays). ``method = "xcorr"``: generalised cross-correlation, thesis
 eqs. (3.26)-(3.27), with the ``weighting`` none / phat / scot / ml, the search limited to
 |τ_i| ≤ |p_i − p_ref|/c + ``margin``, sub-sample peak by ``interp`` (``fft``: band-limited
-maximum, the limit of the thesis's interpft; ``parabolic``; ``none``) (:mod:`.gcc`).
+maximum, the limit of the thesis's interpft; ``sinc``: windowed-sinc interpolation of the sampled
+correlation, as accurate below 0.4 fs and cheaper, for per-snapshot use; ``parabolic``;
+``none``) (:mod:`.gcc`).
 ``method = "unwrap"``: phase-unwrapping LLS, eqs. (3.30)-(3.36) with app. B (:mod:`.unwrap`).
 σ per delay from the peak's curvature and the normalised correlation (:func:`.gcc.delay_sigma`).
 
