@@ -9,23 +9,10 @@ from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
 from arrayproc.sim.run import simulate
 from arrayproc.sim.scenario import parse_scenario
+from tests.conftest import cbf_stage, chain_toml
 
-CHAIN = """
-[[stage]]
-type = "cbf"
-nfft = 2048
-hop = 2048
-window = "hann"
-band = [250.0, 800.0]
-beams = {start = 0.0, stop = 180.0, count = 181}
-[[stage]]
-type = "integrate"
-snapshots = 4
-[[stage]]
-type = "bearings"
-band = [450.0, 750.0]
-lines = true
-"""
+CHAIN = chain_toml(cbf_stage(2048, [250.0, 800.0], 181), {"type": "integrate", "snapshots": 4},
+                   {"type": "bearings", "band": [450.0, 750.0], "lines": True})
 
 
 def test_spl_matches_the_received_levels(tmp_path):

@@ -16,6 +16,7 @@ from arrayproc.io.truth import cone_angles, tonal_frequencies
 from arrayproc.plots import plot_file
 from arrayproc.stages.passive.btr import BTR
 from arrayproc.stages.passive.lofar import LOFAR
+from tests.conftest import cbf_stage, chain_toml
 
 C = 1500.0
 
@@ -110,29 +111,10 @@ def write_truth_recording(path, fs=2048.0, n_h=32, dx=0.75, dur=24.0, seed=3):
     return path
 
 
-CHAIN = """
-[input]
-block = 4096
-[[stage]]
-type = "cbf"
-nfft = 1024
-hop = 512
-window = "hann"
-band = [100.0, 600.0]
-beams = { start = 0.0, stop = 180.0, count = 91 }
-[[stage]]
-type = "integrate"
-snapshots = 4
-[[stage]]
-type = "btr"
-[[stage]]
-type = "lofar"
-input = "integrate"
-[[stage]]
-type = "bearings"
-input = "integrate"
-lines = true
-"""
+CHAIN = chain_toml(cbf_stage(1024, [100.0, 600.0], 91, hop=512),
+                   {"type": "integrate", "snapshots": 4}, {"type": "btr"},
+                   {"type": "lofar", "input": "integrate"},
+                   {"type": "bearings", "input": "integrate", "lines": True}, block=4096)
 
 
 def test_chain_products_truth_and_plots(tmp_path):
