@@ -60,22 +60,24 @@ def simulate(d: Path, n: int, seconds: float, channels: int) -> list[Path]:
     return out
 
 
-def direct(recs: list[Path], chain: Path, outdir: Path) -> float:
-    """Each file as ``arrayproc process`` runs it, in this process; total seconds."""
+def direct(recs: list[Path], chain: Path, outdir: Path) -> tuple[float, float]:
+    """Each file as ``arrayproc process`` runs it, in this process: (wall s, CPU s)."""
     from arrayproc.app.api import load_chain, run_chain
     from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import Recording
     outdir.mkdir(exist_ok=True)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for r in recs:
         spec = load_chain(str(chain))
         with Recording(r) as rec, ProductsWriter(outdir / f"{r.stem}.h5", source=str(r),
                                                  chain=spec.text) as w:
             run_chain(rec, spec, w)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
-def batch_time(client, recs: list[Path], chain: Path, outdir: Path, threads: int) -> float:
+def batch_time(client, recs: list[Path], chain: Path, outdir: Path,
+               threads: int) -> tuple[float, float]:
+    """One batch: (wall s from submit to the last result, CPU s of the tasks, summed)."""
     from arrayproc.app.batch import run_batch
     t0 = time.perf_counter()
     res = run_batch(recs, chain, outdir, client, threads=threads)
@@ -83,7 +85,7 @@ def batch_time(client, recs: list[Path], chain: Path, outdir: Path, threads: int
     bad = [r for r in res if r.status != "done"]
     if bad:
         raise SystemExit(f"batch failed: {bad}")
-    return dt
+    return dt, sum(r.cpu_seconds for r in res)
 
 
 def cluster(n: int, threads: int):
@@ -118,13 +120,6 @@ def main(argv: list[str] | None = None) -> int:
     recs = simulate(d, a.recordings, a.seconds, a.channels)
 
     direct(recs[:1], chain, d / "warm")
-    t_direct = []
-    for _ in range(a.repeats):
-        t_direct.append(direct(recs, chain, d / "direct"))
-        print(f"direct (arrayproc process in one process, {cores} threads): "
-              f"{t_direct[-1]:.1f} s for {len(recs)} files ({load()})", flush=True)
-    out["direct"] = stats(t_direct)
-
     exe = str(Path(sys.executable).with_name("arrayproc"))
     t0 = time.perf_counter()
     subprocess.run([exe, "process", str(recs[0]), "-c", str(chain), "-o",
@@ -134,33 +129,50 @@ def main(argv: list[str] | None = None) -> int:
           f"({load()})", flush=True)
 
     for n_workers, threads in ((1, cores), (1, 1), (2, max(1, cores // 2))):
+        key = f"batch_{n_workers}w_{threads}t"
         t_start = time.perf_counter()
         client, clu = cluster(n_workers, threads)
+        walls, cpus, pairs = [], [], []
         try:
             client.wait_for_workers(n_workers)
             t_up = time.perf_counter() - t_start
             batch_time(client, recs[:n_workers], chain, d / "bwarm", threads)
-            ts = []
             for _ in range(a.repeats):
-                ts.append(batch_time(client, recs, chain, d / f"b{n_workers}x{threads}",
-                                     threads))
-                print(f"batch, {n_workers} worker(s) x {threads} thread(s): {ts[-1]:.1f} s for "
-                      f"{len(recs)} files ({load()})", flush=True)
+                if threads == cores and n_workers == 1:  # overhead: direct and batch in pairs
+                    td, cd = direct(recs, chain, d / "direct")
+                    print(f"direct (as arrayproc process, in this process, {cores} threads): "
+                          f"{td:.1f} s wall, {cd:.1f} s CPU for {len(recs)} files ({load()})",
+                          flush=True)
+                    out.setdefault("direct", []).append({"wall_s": td, "cpu_s": cd})
+                tb, cb = batch_time(client, recs, chain, d / key, threads)
+                walls.append(tb)
+                cpus.append(cb)
+                print(f"batch, {n_workers} worker(s) x {threads} thread(s): {tb:.1f} s wall, "
+                      f"{cb:.1f} s task CPU for {len(recs)} files ({load()})", flush=True)
+                if threads == cores and n_workers == 1:
+                    pairs.append(tb / td - 1.0)
         finally:
             client.close()
             clu.close()
-        out[f"batch_{n_workers}w_{threads}t"] = {**stats(ts), "cluster_start_s": t_up}
+        out[key] = {**stats(walls), "task_cpu_s": cpus, "cluster_start_s": t_up}
+        if pairs:
+            out["overhead_pct_pairs"] = [100.0 * p for p in pairs]
     b1 = out[f"batch_1w_{cores}t"]
     b2 = out[f"batch_2w_{max(1, cores // 2)}t"]
     b11 = out["batch_1w_1t"]
     out["speedup_2w_vs_1w_min"] = b1["min_s"] / b2["min_s"]
     out["speedup_2w_vs_1w1t_min"] = b11["min_s"] / b2["min_s"]
-    out["overhead_pct_min"] = 100.0 * (b1["min_s"] / out["direct"]["min_s"] - 1.0)
-    out["overhead_pct_median"] = 100.0 * (b1["median_s"] / out["direct"]["median_s"] - 1.0)
-    print(f"speed-up 2 workers vs 1 worker ({cores} threads): "
-          f"{out['speedup_2w_vs_1w_min']:.2f}x (min), vs 1 worker x 1 thread: "
-          f"{out['speedup_2w_vs_1w1t_min']:.2f}x; per-task overhead vs direct: "
-          f"{out['overhead_pct_min']:+.1f} % (min), {out['overhead_pct_median']:+.1f} % (median)")
+    # with the cores free, 2 single-thread workers on 4 equal tasks finish in half the summed
+    # task CPU time of 2 workers; 1 worker x 1 thread in its summed task CPU time
+    out["speedup_2w_vs_1w1t_cpu_projection"] = min(b11["task_cpu_s"]) / (min(b2["task_cpu_s"]) / 2)
+    cpu_direct = min(x["cpu_s"] for x in out["direct"])
+    out["overhead_cpu_pct"] = 100.0 * (min(b1["task_cpu_s"]) / cpu_direct - 1.0)
+    print(f"speed-up 2 workers vs 1 worker x {cores} threads: {out['speedup_2w_vs_1w_min']:.2f}x "
+          f"(min wall); vs 1 worker x 1 thread: {out['speedup_2w_vs_1w1t_min']:.2f}x (min wall), "
+          f"{out['speedup_2w_vs_1w1t_cpu_projection']:.2f}x (task CPU projection)")
+    print("per-task overhead vs direct, paired wall: "
+          + ", ".join(f"{p:+.1f} %" for p in out["overhead_pct_pairs"])
+          + f"; task CPU: {out['overhead_cpu_pct']:+.1f} %", flush=True)
 
     if not a.no_mc:
         from arrayproc.evaluate.distributed import lr_table
@@ -198,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{'I' * c:<5}{f.upper():<7}{r['track_loss_pct_known_side']:>12.2f}"
                       f"{r['track_loss_pct_resolved']:>11.2f}{r['rmse_pos_final_m']:>11.0f}"
                       f"{r['true_side_pct']:>11.2f}")
-        out["mc_table"] = {c: {f: {k: v for k, v in r.items() if k != "rmse_pos_m"}
+        out["mc_table"] = {c: {f: {k: v for k, v in r.items() if not isinstance(v, np.ndarray)}
                                for f, r in rows.items()} for c, rows in tables[2].items()}
     if a.json:
         Path(a.json).write_text(json.dumps(out, indent=1, default=float))

@@ -205,12 +205,13 @@ def process_task(recording: str, chain_text: str, output: str, threads: int, see
     Returns
     -------
     dict
-        ``status`` ("done" or "failed"), ``error`` (one line), ``seconds``, ``blocks``.
+        ``status`` ("done" or "failed"), ``error`` (one line), ``seconds`` (wall),
+        ``cpu_seconds`` (the worker process's CPU time, all threads), ``blocks``.
     """
     from arrayproc.app.api import build_chain, run_chain
     from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import Recording
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     _limit_threads(threads)
     warnings: list[str] = []
     try:
@@ -223,7 +224,7 @@ def process_task(recording: str, chain_text: str, output: str, threads: int, see
     except ArrayprocError as e:  # a bad input or chain fails alone, without retries
         return {"status": "failed", "error": str(e), "seconds": time.perf_counter() - t0}
     return {"status": "done", "error": "", "seconds": time.perf_counter() - t0, "blocks": n,
-            "warnings": warnings}
+            "cpu_seconds": time.process_time() - c0, "warnings": warnings}
 
 
 def merge_task(parts: Sequence[str], results: Sequence[dict[str, Any]], output: str,
@@ -272,6 +273,7 @@ class TaskResult:
     status: str  # "done", "skipped" or "failed"
     error: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     segments: int = 1
     parts_run: int = 0
     warnings: list[str] = field(default_factory=list)
@@ -435,6 +437,7 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
                 r = f.result()
                 res.status, res.error = r["status"], r["error"]
                 res.seconds = r.get("seconds", 0.0)
+                res.cpu_seconds = r.get("cpu_seconds", 0.0)
                 res.warnings = r.get("warnings", [])
             except Exception as e:  # noqa: BLE001 - retries exhausted or worker lost: report it
                 res.status = "failed"

@@ -223,7 +223,8 @@ def lr_table(runs: int, seed: int, cases: Sequence[int], filters: Sequence[str],
         ``{case: {filter: {"track_loss_pct_known_side", "track_loss_pct_resolved",
         "rmse_pos_final_m", "rmse_vel_final_mps", "rmse_pos_final_m_known_side",
         "bias_norm_final_m", "true_side_pct", "seconds_known_side", "seconds_resolved",
-        "rmse_pos_m" (K,)}}}``; RMSE and bias over the runs not lost (m, m/s).
+        "rmse_pos_m" (K,), "rmse_vel_mps" (K,), "bias_norm_m" (K,)}}}``; RMSE and bias over
+        the runs not lost (m, m/s), with the side resolved.
     """
     params = params or {}
     table: dict[int, dict[str, dict]] = {}
@@ -255,6 +256,6 @@ def lr_table(runs: int, seed: int, cases: Sequence[int], filters: Sequence[str],
                 else float("nan"),
                 "seconds_known_side": float(sum(p[name]["seconds_known"] for p in parts)),
                 "seconds_resolved": float(sum(p[name]["seconds_res"] for p in parts)),
-                "rmse_pos_m": rmse_pos,
+                "rmse_pos_m": rmse_pos, "rmse_vel_mps": rmse_vel, "bias_norm_m": bias,
             }
     return table
