@@ -349,3 +349,58 @@ def sinc_refine(r, rows, x0, lo, hi, n_iter, tol):
         rv[i] = v
         r2v[i] = v2
     return xs, rv, r2v
+
+
+@njit(cache=True)
+def fill_transposed(frames, buf, n):
+    """buf[s, c, :n] = frames[s, :, c] and buf[s, c, n:] = 0, in cache-sized tiles.
+
+    Parameters
+    ----------
+    frames : (S, n, C) float array
+        Snapshots, time along axis 1.
+    buf : (S, C, N) float array
+        Transform input, N >= n.
+    n : int
+        Samples per snapshot.
+    """
+    S, _, C = frames.shape
+    N = buf.shape[2]
+    tile = 64
+    for s in range(S):
+        for t0 in range(0, n, tile):
+            t1 = min(n, t0 + tile)
+            for c in range(C):
+                for t in range(t0, t1):
+                    buf[s, c, t] = frames[s, t, c]
+        for c in range(C):
+            for t in range(n, N):
+                buf[s, c, t] = 0.0
+
+
+@njit(cache=True)
+def cross_band(X, ref, out, energy):
+    """Cross-spectra against the reference and band energies in one pass.
+
+    Parameters
+    ----------
+    X : (S, C, nb) complex array
+        Band bins of every channel's spectrum.
+    ref : int
+        Reference channel.
+    out : (S·C, nb) complex array
+        Receives X[s, c] · conj(X[s, ref]) in row s·C + c.
+    energy : (S, C) float64 array
+        Receives Σ_k |X[s, c, k]|².
+    """
+    S, C, nb = X.shape
+    for s in range(S):
+        for c in range(C):
+            row = s * C + c
+            acc = 0.0
+            for k in range(nb):
+                x = X[s, c, k]
+                r = X[s, ref, k]
+                out[row, k] = x * np.conj(r)
+                acc += float(x.real) * float(x.real) + float(x.imag) * float(x.imag)
+            energy[s, c] = acc

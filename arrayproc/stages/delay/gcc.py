@@ -52,6 +52,8 @@ from arrayproc.dsp import fft
 from ._kernels import (
     SINC_HALF,
     corr_at,
+    cross_band,
+    fill_transposed,
     predicted_peaks,
     refine_peaks,
     sinc_refine,
@@ -209,8 +211,11 @@ class GccEstimator:
         dtype = np.float32 if frames.dtype == np.float32 else np.float64
         plan = fft.buffered_plan("rfft", (S * n_ch, self.nfft), dtype)
         buf = plan.input.reshape(S, n_ch, self.nfft)
-        buf[:, :, :n] = frames.transpose(0, 2, 1)
-        buf[:, :, n:] = 0.0
+        if frames.dtype == buf.dtype:
+            fill_transposed(frames, buf, n)
+        else:
+            buf[:, :, :n] = frames.transpose(0, 2, 1)
+            buf[:, :, n:] = 0.0
         return plan().reshape(S, n_ch, -1)[:, :, self.k1:self.k2]
 
     def _weights(self, G: np.ndarray, X: np.ndarray, tau0: np.ndarray) -> np.ndarray:
@@ -265,22 +270,34 @@ class GccEstimator:
         """As :meth:`__call__`, from the band bins returned by :meth:`spectra`."""
         S, n_ch, nb = X.shape
         ref = self.reference
-        G = X * np.conj(X[:, ref][:, None, :])
         L = self.Lw  # index of lag 0 in the correlation rows
         m = S * n_ch
         lim = np.tile(self.lag_samples, S)
         lo_i, hi_i = L - lim, L + lim
-        if self.weighting == "none":
+        cdt = np.complex64 if X.dtype == np.complex64 else np.complex128
+        plan = fft.buffered_plan("irfft", (m, self.nfft // 2 + 1), cdt)
+        z = plan.input
+        E = np.empty((S, n_ch))
+        if self.weighting == "none":  # the cross-spectrum goes straight into the inverse input
+            G = z[:, self.k1:self.k2]
+            cross_band(X, ref, G, E)
             Gw = G
         else:
+            G = np.empty((m, nb), cdt)
+            cross_band(X, ref, G, E)
             if self.weighting == "ml":
-                r0 = self._correlate(G.reshape(m, nb))
+                r0 = self._correlate(G)
                 i0 = windowed_peaks(r0, lo_i, hi_i, 1, 1.0)[0][:, 0]
                 tau0 = ((i0 - L) / self.fs).reshape(S, n_ch)
             else:
                 tau0 = np.zeros((S, n_ch))
-            Gw = (G * self._weights(G, X, tau0)).astype(G.dtype)
-        r = self._correlate(Gw.reshape(m, nb))
+            W = self._weights(G.reshape(S, n_ch, nb), X, tau0).reshape(m, nb)
+            z[:, self.k1:self.k2] = G * W
+            Gw = z[:, self.k1:self.k2]
+        z[:, :self.k1] = 0.0
+        z[:, self.k2:] = 0.0
+        full = plan()
+        r = np.concatenate([full[:, self.nfft - L:], full[:, :L + 1]], axis=1)
         K = 1 if self.interp == "none" else self.candidates
         idx, count = windowed_peaks(r, lo_i, hi_i, K, self._frac)
         keep = (np.arange(K)[None, :] < count[:, None]).reshape(-1)
@@ -301,7 +318,7 @@ class GccEstimator:
             tau = tau + delta
             peak = y1 - 0.25 * (y0 - y2) * delta
         tau = np.clip(tau / self.fs, -lim_s, lim_s)
-        Gm = np.ascontiguousarray(Gw.reshape(m, nb))
+        Gm = Gw  # rows contiguous, row stride of the inverse transform's input
         if self.interp == "fft":
             centre = (idx - L) / self.fs
             lo = np.maximum(centre - 1.0 / self.fs, -lim_s)
@@ -338,8 +355,6 @@ class GccEstimator:
         else:
             ru, ru2 = corr_at(G.reshape(m, nb), self.freqs[0], self.df,
                               np.ascontiguousarray(tau))
-        Xf = X.view(np.float32 if X.dtype == np.complex64 else np.float64)
-        E = np.einsum("ijk,ijk->ij", Xf, Xf, dtype=np.float64)
         norm = np.sqrt(np.maximum(E * E[:, ref][:, None], 1e-300)).reshape(-1)
         rho = ru / norm
         tau = tau.reshape(S, n_ch)
