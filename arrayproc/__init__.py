@@ -17,13 +17,7 @@ the full list is ``arrayproc.__all__``.
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
 from typing import Any
-
-try:
-    __version__ = version("arrayproc")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
 
 #: public name -> module that defines it
 _API = {
@@ -66,7 +60,20 @@ _MODULES = {"schema": "arrayproc.io.schema"}
 __all__ = ["__version__", *_API, *_MODULES]
 
 
+def _version() -> str:
+    # Looked up on first use: importlib.metadata costs about a third of the start-up of
+    # `arrayproc info` (issue 12, start-up).
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("arrayproc")
+    except PackageNotFoundError:  # running from a source tree without installation
+        return "0.0.0+unknown"
+
+
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        globals()[name] = v = _version()
+        return v
     if name in _MODULES:
         value = importlib.import_module(_MODULES[name])
         globals()[name] = value
