@@ -1,7 +1,8 @@
 """Range-Doppler map of one ping on one beam (the ``range_doppler`` product of the
 ``matched_filter`` stage, thesis figs. 4.1 / 4.7): |chi|^2 in dB re its peak, fixed dynamic
-range, range across and range rate up; true echoes of the ping drawn when the source
-recording holds ``/truth/echoes``."""
+range, range across and range rate up; true echoes of the ping within 3 deg of the beam drawn when
+the source recording holds ``/truth/echoes`` (range from the array at reception, as the
+contacts')."""
 
 from __future__ import annotations
 
@@ -54,9 +55,10 @@ def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: in
         with Recording(src) as rec:
             tr = echo_truth(rec)
         if tr is not None:
-            m = ((tr["ping"] == pings[i]) & (tr["range_m"] >= rng.min())
-                 & (tr["range_m"] <= rng.max()) & (np.abs(tr["cone_deg"] - cones[i]) < 20))
-            for r, v, n in zip(tr["range_m"][m], tr["range_rate_mps"][m], tr["name"][m]):
+            ra = tr["range_array_m"]
+            m = ((tr["ping"] == pings[i]) & (ra >= rng.min()) & (ra <= rng.max())
+                 & (np.abs(tr["cone_deg"] - cones[i]) < 3.0))
+            for r, v, n in zip(ra[m], tr["range_rate_mps"][m], tr["name"][m]):
                 ax.plot(r, v, "o", mfc="none", mec="w", ms=12, mew=1.2)
                 ax.annotate(f"truth: {n}", (r, v), xytext=(8, 8), textcoords="offset points",
                             color="w", fontsize=8)
