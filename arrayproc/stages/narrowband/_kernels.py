@@ -27,7 +27,7 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
              x: np.ndarray, c: float, mix0: float, mix_step: float, rinv: np.ndarray,
              q: np.ndarray,
              state: np.ndarray, cov: np.ndarray, out: np.ndarray,
-             uniform: bool = False) -> None:
+             uniform: bool = False, beta: float = 1.0) -> None:
     """Run the EKF over ``T`` samples, updating ``state`` (θ rad, f Hz) and ``cov`` (2, 2) in
     place and writing ``out[k] = (θ, f, P_θθ, P_ff)`` after each sample's update.
 
@@ -37,7 +37,9 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
     inverse noise variance of each real measurement component; ``q`` (2,) process noise
     variance per second of θ (rad²/s) and f (Hz²/s). ``uniform``: the elements are equally
     spaced in ``x`` order, so the element phasors follow from the first by a constant rotation
-    (one complex product per element instead of a sine and a cosine).
+    (one complex product per element instead of a sine and a cosine). ``beta`` = 1 applies
+    the own-speed Doppler factor to the element delay term as in thesis eq. (3.18); 0 applies
+    it to the time term only (see :mod:`.model`).
     """
     n_t, n = yr.shape
     th, f = state[0], state[1]
@@ -50,7 +52,8 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
         ct = math.cos(th)
         st = math.sin(th)
         a = 1.0 + speed * ct / c
-        wf = TWO_PI * f * a
+        b = 1.0 + beta * speed * ct / c
+        wf = TWO_PI * f
         gt0 = -TWO_PI * f * st / c
         j00 = 0.0
         j01 = 0.0
@@ -59,18 +62,18 @@ def ekf_span(yr: np.ndarray, yi: np.ndarray, cplx: bool, tau0: float, dt: float,
         b1 = 0.0
         zr = zi = rr = ri = 0.0
         if uniform:
-            ps0 = wf * (tau + x[0] * ct / c)
+            ps0 = wf * (a * tau + b * x[0] * ct / c)
             if cplx:
                 ps0 -= mix0 + k * mix_step
             zr = math.cos(ps0)
             zi = math.sin(ps0)
-            dph = wf * (x[1] - x[0]) * ct / c if n > 1 else 0.0
+            dph = wf * b * (x[1] - x[0]) * ct / c if n > 1 else 0.0
             rr = math.cos(dph)
             ri = math.sin(dph)
         for m in range(n):
-            s = tau + x[m] * ct / c
-            gth = gt0 * (speed * s + a * x[m])
-            gf = TWO_PI * a * s
+            s = a * tau + b * x[m] * ct / c
+            gth = gt0 * (speed * tau + b * x[m] + beta * speed * x[m] * ct / c)
+            gf = TWO_PI * s
             if uniform:
                 cs = zr
                 sn = zi

@@ -81,6 +81,9 @@ class NarrowbandEKF:
     align_phase : bool
         Choose each (re)start's time origin so that the model phase matches (see the module
         docstring); False re-initialises with the origin at the restart time (the thesis).
+    spatial_doppler : bool
+        Own-speed Doppler factor on the element delay term too (thesis eq. (3.18)); False:
+        on the time term only, the exact plane-wave phase (see :mod:`.model`).
     threads : int
         With ``dual``, run the two filters of each span in two threads (the kernel releases
         the GIL; the filters are independent between re-initialisations, so the output is
@@ -91,7 +94,8 @@ class NarrowbandEKF:
                  fc: float | None = None, p0: tuple[float, float] = (2.0, 0.5),
                  q: tuple[float, float] = (0.05, 0.01), noise: float | None = None,
                  reinit_s: float = 30.0, dual: bool = True, amp_tau_s: float = 5.0,
-                 align_phase: bool = True, threads: int = 1) -> None:
+                 align_phase: bool = True, threads: int = 1,
+                 spatial_doppler: bool = True) -> None:
         # positions from the array centre: the model's common phase then refers to the centre,
         # where a cone error adds no phase (any reference is a constant phase for eq. (3.21))
         x = np.asarray(x, float)
@@ -107,6 +111,7 @@ class NarrowbandEKF:
         self.dual = bool(dual)
         self.amp_tau_s = float(amp_tau_s)
         self.align_phase = bool(align_phase)
+        self.spatial_doppler = bool(spatial_doppler)
         self._pool = (ThreadPoolExecutor(2) if self.dual and threads > 1 else None)
         self._x0 = np.array([math.radians(cone_deg), float(freq_hz)])
         self._filters: list[_Filter] | None = None
@@ -124,7 +129,8 @@ class NarrowbandEKF:
         n = max(1, min(y.shape[0], int(round(ALIGN_S * fs))))
         th, f = self._x0
         tau = np.arange(n) / fs
-        ph = np.stack([phase(th, f, tk, self.x, speed, self.c) for tk in tau])
+        ph = np.stack([phase(th, f, tk, self.x, speed, self.c, self.spatial_doppler)
+                       for tk in tau])
         if self.fc is not None:
             ph = ph - self._mix(t0, fs, n)[:, None]
             r = np.sum(y[:n] * np.exp(-1j * ph))
@@ -218,7 +224,8 @@ class NarrowbandEKF:
             def span(f: _Filter, o: np.ndarray, k=k, k1=k1, t_k=t_k, mix0=mix0) -> None:
                 _kernels.ekf_span(yr[k:k1], yi[k:k1] if cplx else yi, cplx, t_k - f.origin,
                                   dt, speed, self.x, self.c, mix0, mix_step, rinv, self.q,
-                                  f.state, f.cov, o[k:k1], self.uniform)
+                                  f.state, f.cov, o[k:k1], self.uniform,
+                                  1.0 if self.spatial_doppler else 0.0)
 
             if self._pool is not None:
                 for fut in [self._pool.submit(span, f, o) for f, o in zip(self._filters, outs)]:

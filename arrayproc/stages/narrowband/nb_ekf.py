@@ -77,6 +77,9 @@ class NarrowbandEKFStage(Stage):
                              check=positive),
         "align_phase": Param("bool", True, "start each (re)initialised filter with its model "
                              "phase matched (false: the thesis's re-initialisation)"),
+        "spatial_doppler": Param("bool", True, "own-speed Doppler factor on the element delays "
+                                 "too, as thesis eq. (3.18) (false: exact moving-array phase, no "
+                                 "end-fire bias)"),
         "baseline": Param("bool", False, "also write the per-sample CBF baseline (thesis "
                           "3.2.1.1) as nb_tracks group '<name>_cbf' (filter = -1)"),
     }
@@ -119,7 +122,8 @@ class NarrowbandEKFStage(Stage):
             x, cone, freq, c, fc=fc, p0=(self.p0_cone_deg, self.p0_freq_hz),
             q=(self.sigma_cone_deg, self.sigma_freq_hz),
             noise=None if self.noise == "auto" else float(self.noise),
-            reinit_s=self.reinit_s, dual=self.dual, align_phase=self.align_phase)
+            reinit_s=self.reinit_s, dual=self.dual, align_phase=self.align_phase,
+            spatial_doppler=self.spatial_doppler)
 
     def _track(self, y: np.ndarray, b: Block, x: np.ndarray, speed: float, out,
                cbf_out=None) -> None:

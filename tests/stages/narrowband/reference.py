@@ -11,7 +11,7 @@ from arrayproc.stages.narrowband.model import jacobian, measurement, reflect_con
 
 def ekf_reference(y: np.ndarray, tau0: float, dt: float, speed: float, x: np.ndarray, c: float,
                   mix0: float | None, mix_step: float, r: np.ndarray, q: np.ndarray,
-                  state: np.ndarray, cov: np.ndarray) -> np.ndarray:
+                  state: np.ndarray, cov: np.ndarray, spatial_doppler: bool = True) -> np.ndarray:
     """Run the gain-form EKF over y (T, N) (complex when ``mix0``, the first sample's mixing
     phase in rad, is given; ``mix_step`` rad per sample); returns (T, 4) rows
     (θ, f, P_θθ, P_ff)."""
@@ -24,8 +24,8 @@ def ekf_reference(y: np.ndarray, tau0: float, dt: float, speed: float, x: np.nda
         tau = tau0 + k * dt
         p = p + np.diag(q) * dt
         mix = mix0 + k * mix_step if cplx else None
-        h = measurement(st[0], st[1], tau, x, speed, c, mix)
-        hj = jacobian(st[0], st[1], tau, x, speed, c, mix)
+        h = measurement(st[0], st[1], tau, x, speed, c, mix, spatial_doppler)
+        hj = jacobian(st[0], st[1], tau, x, speed, c, mix, spatial_doppler)
         if cplx:
             h = np.concatenate([h.real, h.imag])
             hj = np.concatenate([hj.real, hj.imag])

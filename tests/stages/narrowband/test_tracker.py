@@ -80,6 +80,26 @@ def test_wrong_own_speed_biases_frequency_by_the_doppler_factor():
     assert abs(np.median(o["freq_hz"][o["time"] > 10]) - fd) < 0.01
 
 
+@pytest.mark.parametrize("cone", [10.0, 20.0])
+def test_spatial_doppler_bias_near_end_fire(cone):
+    """Exact moving-array plane wave (Doppler factor on the time term only), U = 5 m/s, clean:
+    the thesis's eq. (3.18) model (factor on the element delays too) is biased by
+    δ(cos θ) = −U cos² θ / c / (1 + U cos θ / c) in cone, the exact model is not."""
+    fs = 80.0
+    t = np.arange(int(30 * fs)) / fs
+    y = tonal(t, X, cone, 697.0, 5.0, 30.0, seed=3, fc=FC, spatial_doppler=False)
+    late = t >= 10.0
+    ct = math.cos(math.radians(cone))
+    biased = math.degrees(math.acos(ct / (1 + 5.0 * ct / C)))
+    o = run(y, fs, 0.0, 5.0, cone + 0.5, 697.0)
+    assert abs(np.median(o["cone_deg"][late]) - biased) < 0.01
+    assert np.max(np.abs(o["cone_deg"][late] - biased)) < 0.06
+    o = run(y, fs, 0.0, 5.0, cone + 0.5, 697.0, spatial_doppler=False)
+    assert abs(np.median(o["cone_deg"][late]) - cone) < 0.01
+    assert np.max(np.abs(o["cone_deg"][late] - cone)) < 0.06
+    assert abs(biased - cone) > 0.2
+
+
 def test_tracks_doppler_shifted_tonal_within_one_lofar_bin():
     """A received frequency sweeping 3 Hz in 120 s (and cone 60→75°) is followed to well within
     one LOFAR bin (5120/2048 = 2.5 Hz) after convergence, at -2 dB per element."""
