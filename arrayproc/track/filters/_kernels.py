@@ -228,16 +228,16 @@ def sp_predict_moments(x, P, Y, Q, wm, wc, st: int) -> int:
 
 
 @njit(cache=True)
-def sp_update_points(x, P, U, Xs, L) -> int:
+def sp_update_points(x, P, U, Xs, L, nrows: int) -> int:
     """Sample points of the measurement update, redrawn from the predicted (x, P):
-    X_i = x + L U_i, each row formed as x_r + Σ_{j ≤ r} L_rj U_ij (L lower triangular).
-    Writes ``Xs`` (npts, n) and the factor ``L``; returns the status."""
-    n = x.shape[0]
+    X_i = x + L U_i, each row formed as x_r + Σ_{j ≤ r} L_rj U_ij (L lower triangular), for the
+    first ``nrows`` state components (those the measurement reads; the rest of ``Xs`` is left
+    as is). Writes ``Xs`` (npts, n) and the factor ``L``; returns the status."""
     st = chol_repair(P, L)
     if st < 0:
         return -1
     for p in range(U.shape[0]):
-        for r in range(n):
+        for r in range(nrows):
             v = x[r]
             for j in range(r + 1):
                 v += L[r, j] * U[p, j]
@@ -287,42 +287,61 @@ def sp_measurement_moments(Zs, R, angular, U, wm, wc):
 def sp_update_correct(x, P, L, z, Zs, R, angular, U, wm, wc, st: int):
     """Sample-point measurement update from h(X_i) = ``Zs`` (points of
     :func:`sp_update_points`, factor ``L``): Kalman gain L G S⁻¹, wrapped residual.
-    Returns (log N(ν; 0, S), status). In place."""
+    Returns (log N(ν; 0, S), status). In place. A scalar measurement takes the moments of
+    :func:`sp_measurement_moments` without temporaries (same arithmetic)."""
     n = x.shape[0]
     m = z.shape[0]
-    zp, S, G = sp_measurement_moments(Zs, R, angular, U, wm, wc)
-    nu = np.empty(m)
-    residual(z, zp, angular, nu)
     if m == 1:
-        s = S[0, 0]
+        ang = angular[0]
+        zref = Zs[0, 0]
+        acc = 0.0
+        if ang:
+            for p in range(Zs.shape[0]):
+                acc += wm[p] * wrap(Zs[p, 0] - zref)
+            zp = wrap(zref + acc)
+        else:
+            for p in range(Zs.shape[0]):
+                acc += wm[p] * Zs[p, 0]
+            zp = acc
+        s = R[0, 0]
+        g = np.zeros(n)
+        for p in range(Zs.shape[0]):
+            dz = wrap(Zs[p, 0] - zp) if ang else Zs[p, 0] - zp
+            s += wc[p] * dz * dz
+            for j in range(n):
+                g[j] += wc[p] * U[p, j] * dz
         if not s > 0.0:
             return -np.inf, -1
-        g = G[:, 0].copy()
         Pxz = L @ g
-        ll = -0.5 * (_LOG_2PI + math.log(s) + nu[0] * nu[0] / s)
+        nu = wrap(z[0] - zp) if ang else z[0] - zp
+        ll = -0.5 * (_LOG_2PI + math.log(s) + nu * nu / s)
         for i in range(n):
-            x[i] += Pxz[i] / s * nu[0]
+            x[i] += Pxz[i] / s * nu
         for i in range(n):
             for j in range(n):
                 P[i, j] -= Pxz[i] * Pxz[j] / s
     else:
+        zpv, S, G = sp_measurement_moments(Zs, R, angular, U, wm, wc)
+        nuv = np.empty(m)
+        residual(z, zpv, angular, nuv)
         Ls = np.empty((m, m))
         if not _chol(S, Ls):
             return -np.inf, -1
         Si = np.linalg.inv(S)
-        Pxz = L @ G
-        K = Pxz @ Si
-        ll = -0.5 * (m * _LOG_2PI + nu @ (Si @ nu))
+        Pxz2 = L @ G
+        K = Pxz2 @ Si
+        ll = -0.5 * (m * _LOG_2PI + nuv @ (Si @ nuv))
         for a in range(m):
             ll -= math.log(Ls[a, a])
-        dx = K @ nu
+        dx = K @ nuv
         for i in range(n):
             x[i] += dx[i]
-        P[:, :] = P - K @ Pxz.T
+        P[:, :] = P - K @ Pxz2.T
     st2 = chol_repair(P, L)
     if st2 < 0 or not finite_state(x, P) or not math.isfinite(ll):
         return ll, -1
     return ll, max(st, st2)
+
 
 # ---------------------------------------------------------------------------------------------
 # Shifted Rayleigh filter

@@ -156,9 +156,9 @@ class GaussianFilter(Filter):
                                    R, ang)
         else:
             U, wm, wc = self.points(x.size)
-            Xs = np.empty((U.shape[0], x.size))
+            Xs = np.zeros((U.shape[0], x.size))
             L = np.empty((x.size, x.size))
-            st = kf.sp_update_points(x, P, U, Xs, L)
+            st = kf.sp_update_points(x, P, U, Xs, L, _rows(measurement_model, x.size))
             self._check(st, "update")
             Zs = np.empty((U.shape[0], zz.size))
             measurement_model.function_points(Xs, ctx, Zs)
@@ -195,15 +195,22 @@ class GaussianFilter(Filter):
                 np.ascontiguousarray(measurement_model.jacobian(x, ctx)), R, ang)
         U, wm, wc = self.points(x.size)
         P = state.P.copy()
-        Xs = np.empty((U.shape[0], x.size))
+        Xs = np.zeros((U.shape[0], x.size))
         L = np.empty((x.size, x.size))
-        self._check(kf.sp_update_points(x.copy(), P, U, Xs, L), "innovation")
+        self._check(kf.sp_update_points(x.copy(), P, U, Xs, L, _rows(measurement_model, x.size)),
+                    "innovation")
         Zs = np.empty((U.shape[0], zz.size))
         measurement_model.function_points(Xs, ctx, Zs)
         zp, S, _ = kf.sp_measurement_moments(Zs, R, ang, U, wm, wc)
         nu = np.empty(zz.size)
         kf.residual(zz, zp, ang, nu)
         return nu, S
+
+
+def _rows(measurement_model: MeasurementModel, n: int) -> int:
+    """State rows the model reads (all if it does not say)."""
+    r = measurement_model.state_rows
+    return n if r is None else min(int(r), n)
 
 
 class EKF(GaussianFilter):

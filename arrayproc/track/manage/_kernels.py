@@ -131,7 +131,7 @@ def _update_bearing(kind: int, x, P, z: float, sigma: float, U, wm, wc, Xs, Zs, 
         zp[0] = bearing(x)
         bearing_jacobian(x, H)
         return ekf_update(x, P, zv, zp, H, R, ang)
-    st = sp_update_points(x, P, U, Xs, L)
+    st = sp_update_points(x, P, U, Xs, L, 2)  # the bearing reads x, y
     if st < 0:
         return -np.inf, -1
     bearing_points(Xs, Zs)

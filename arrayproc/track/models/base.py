@@ -55,6 +55,9 @@ class MeasurementModel(Component):
 
     name = "measurement"
     angular: ClassVar[tuple[bool, ...]] = ()
+    #: number of leading state components h reads (None: all); sample-point filters form
+    #: only those rows of their points (Stone Soup's measurement ``mapping``)
+    state_rows: ClassVar[int | None] = None
 
     @property
     def ndim_meas(self) -> int:

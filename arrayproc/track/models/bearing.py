@@ -28,6 +28,7 @@ class Bearing(MeasurementModel):
     """z = γ(X) + w, w ~ N(0, σθ²) (eq. (7)); ``sigma_deg`` is σθ in degrees."""
 
     name = "bearing"
+    state_rows = 2
     angular = (True,)
     params = {"sigma_deg": Param("float", 1.5, "bearing noise σθ, deg", check=_positive)}
 

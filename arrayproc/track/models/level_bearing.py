@@ -39,6 +39,7 @@ class LevelBearing(MeasurementModel):
     """
 
     name = "level_bearing"
+    state_rows = 4
     angular = (True, False)
     params = {
         "sigma_deg": Param("float", 1.5, "bearing noise σθ, deg", check=_positive),

@@ -24,6 +24,7 @@ class MirroredBearing(MeasurementModel):
     """z = wrap(2h − γ(X)) + w, w ~ N(0, σθ²) (eq. (8)); h = ``ctx.heading``."""
 
     name = "mirrored_bearing"
+    state_rows = 2
     angular = (True,)
     params = {"sigma_deg": Param("float", 1.5, "bearing noise σθ, deg",
                                  check=lambda v: None if v > 0 else "must be > 0")}

@@ -30,6 +30,7 @@ class TDOA(MeasurementModel):
     """TDOA of every element but ``reference`` (s), thesis eqs. (3.37)-(3.39)."""
 
     name = "tdoa"
+    state_rows = 2
     params = {
         "elements": Param("any", doc="element positions (n, 3), m, relative to the observer"),
         "reference": Param("int", 0, "reference element"),
