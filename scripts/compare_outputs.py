@@ -23,7 +23,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 XAV = REPO.parent / "shared" / "data" / "xav-large-array"
-EXE = str(Path(sys.executable).with_name("arrayproc"))
+EXE = [sys.executable, "-m", "arrayproc"]  # the package on sys.path (PYTHONPATH wins)
 
 
 def data_dir() -> Path:
@@ -34,7 +34,7 @@ def data_dir() -> Path:
 
 
 def run(args: list[str]) -> bool:
-    p = subprocess.run([EXE, *args, *(["--no-progress"] if args[0] in
+    p = subprocess.run([*EXE, *args, *(["--no-progress"] if args[0] in
                                        ("simulate", "process", "track") else [])],
                        capture_output=True, text=True)
     status = "ok" if p.returncode == 0 else f"exit {p.returncode}: {p.stderr.strip()[-200:]}"

@@ -15,6 +15,7 @@ domain              data axes                       meta
 ``RANGE_DOPPLER``   (beam, range_rate, range)       :class:`PingMeta`
 ``CONTACTS``        (contact,)                      :class:`PingMeta`
 ``EVENT``           (time, channel)                 :class:`EventMeta`
+``DELAYS``          (channel,)                      :class:`DelaysMeta`
 ==================  ==============================  ======================================
 """
 
@@ -38,6 +39,7 @@ class Domain(enum.Enum):
     RANGE_DOPPLER = "range_doppler"
     CONTACTS = "contacts"
     EVENT = "event"
+    DELAYS = "delays"
 
     @property
     def axes(self) -> tuple[str, ...]:
@@ -57,6 +59,7 @@ _AXES = {
     Domain.RANGE_DOPPLER: ("beam", "range_rate", "range"),
     Domain.CONTACTS: ("contact",),
     Domain.EVENT: ("time", "channel"),
+    Domain.DELAYS: ("channel",),
 }
 
 
@@ -209,6 +212,36 @@ class EventMeta:
     channel: int
 
 
+@dataclass(frozen=True)
+class DelaysMeta:
+    """One row of delays (a ``DELAYS`` block's data: (n_ch,) s relative to the reference) with
+    what localisation needs.
+
+    Attributes
+    ----------
+    time : float
+        Time of the row, s since the recording start.
+    sigma, corr : (n_ch,) ndarray
+        Standard deviation (s) and normalised peak correlation of each delay.
+    reference : int
+        Reference channel.
+    elements : (n_ch, 3) ndarray
+        Element positions in the world frame (x east, y north, z down), m.
+    sound_speed : float
+        m/s.
+    event : int
+        Detection number, or -1 for a regular snapshot.
+    """
+
+    time: float
+    sigma: np.ndarray
+    corr: np.ndarray
+    reference: int
+    elements: np.ndarray
+    sound_speed: float
+    event: int = -1
+
+
 META_TYPES: dict[Domain, type] = {
     Domain.TIME: TimeMeta,
     Domain.SPECTRA: SnapshotMeta,
@@ -218,4 +251,5 @@ META_TYPES: dict[Domain, type] = {
     Domain.RANGE_DOPPLER: PingMeta,
     Domain.CONTACTS: PingMeta,
     Domain.EVENT: EventMeta,
+    Domain.DELAYS: DelaysMeta,
 }

@@ -30,8 +30,8 @@ CHUNK_BYTES = 1 << 18
 class GroupWriter:
     """Appends rows to one products group.
 
-    ``time_window`` (t_start, t_stop) drops rows whose ``time`` falls outside it: this is how a
-    segment with a warm-up margin writes only its own rows.
+    ``time_window`` (t_start, t_stop) drops rows whose ``time`` (else ``time_start`` or ``t0``)
+    falls outside it: this is how a segment with a warm-up margin writes only its own rows.
     """
 
     def __init__(self, group: h5py.Group, time_window: tuple[float, float] | None = None,
@@ -71,8 +71,9 @@ class GroupWriter:
             shapes = {k: v.shape for k, v in cols.items()}
             raise ValueError(f"columns of unequal length: {shapes}")
         cols = {k: (v.reshape(1) if v.ndim == 0 else v) for k, v in cols.items()}
-        if self._window is not None and "time" in cols:
-            t = cols["time"]
+        tcol = next((c for c in ("time", "time_start", "t0") if c in cols), None)
+        if self._window is not None and tcol is not None:
+            t = cols[tcol]
             keep = (t >= self._window[0]) & (t < self._window[1])
             if not keep.all():
                 cols = {k: v[keep] for k, v in cols.items()}

@@ -33,7 +33,7 @@ class Localise(Stage):
     """TDOA localisation of events (see the module docstring)."""
 
     kind = "localise"
-    accepts = frozenset({DELAYS})  # type: ignore[arg-type]
+    accepts = frozenset({DELAYS})
     params = {
         "min_corr": Param("float", 0.3, "smallest normalised correlation of a usable delay"),
         "min_pairs": Param("int", 4, "fewest usable delays of a localised event"),

@@ -38,7 +38,7 @@ class Tde(Stage):
 
     kind = "tde"
     accepts = frozenset({Domain.EVENT, Domain.TIME})
-    produces = DELAYS  # type: ignore[assignment]
+    produces = DELAYS
     params = {
         "reference": Param("int", 0, "reference channel"),
         "band": Param("band", None, "band [lo, hi] Hz of the cross-spectrum (default: all)"),
