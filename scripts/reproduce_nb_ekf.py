@@ -221,7 +221,7 @@ def run_case(kind, snr_db, args, seed, cone_deg=None):
                 "kal_dual_exact_doppler": run_ekf(y, t0, fs, fc, x, speed, cone0, f0, True,
                                                   args.reinit, q, True,
                                                   spatial_doppler=False)}
-    cbf = cbf_track(y, fs, x, C, fc=fc, band=BAND)
+    cbf = cbf_track(y, fs, x, C, fc=fc, band=BAND, speed=speed)
     ok = t >= t[0] + SETTLE_S
     err = {k: np.abs(v["cone_deg"] - cone_t) for k, v in variants.items()}
     e_k = err["kal_dual"]
@@ -267,7 +267,8 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=1000.0, help="s per scenario")
     ap.add_argument("--snr", type=float, nargs="+", default=[0.0, -20.0],
                     help="hydrophone SNR, dB")
-    ap.add_argument("--scenarios", nargs="+", default=["stationary", "moving"])
+    ap.add_argument("--scenarios", nargs="*", default=["stationary", "moving"],
+                    help="scenarios to run (none: only the --sweep)")
     ap.add_argument("--speed", type=float, default=5.0, help="array speed, kn")
     ap.add_argument("--reinit", type=float, default=30.0, help="re-initialisation period, s")
     ap.add_argument("--sigma-cone", type=float, default=0.05, help="deg/sqrt(s)")

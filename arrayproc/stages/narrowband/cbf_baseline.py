@@ -24,7 +24,8 @@ from arrayproc.stages.narrowband.initial import cone_scan, strongest_line
 
 def cbf_track(y: np.ndarray, fs: float, x: np.ndarray, sound_speed: float, fc: float = 0.0,
               band: tuple[float, float] | None = None, coarse_s: float = 4.0,
-              fine_deg: float = 0.1, half_width_deg: float = 3.0) -> dict[str, np.ndarray]:
+              fine_deg: float = 0.1, half_width_deg: float = 3.0,
+              speed: float = 0.0) -> dict[str, np.ndarray]:
     """Cone angle at every sample from the envelope of fine beams.
 
     Parameters
@@ -45,6 +46,10 @@ def cbf_track(y: np.ndarray, fs: float, x: np.ndarray, sound_speed: float, fc: f
         Window of the coarse scan and the line frequency, s.
     fine_deg, half_width_deg : float
         Fine-beam spacing and half-width of the fan around the coarse maximum, deg.
+    speed : float
+        Own speed along the array, m/s: each fine beam is steered at the water-frame
+        frequency f_line / (1 + U cos θ / c), the wavelength that sets the phase across a
+        moving array (steering at the received f_line biases cos θ by −U cos² θ / c).
 
     Returns
     -------
@@ -67,7 +72,9 @@ def cbf_track(y: np.ndarray, fs: float, x: np.ndarray, sound_speed: float, fc: f
         f_line = strongest_line(zz, fs, band, fc)
         c0, _, _ = cone_scan(zz, fs, f_line, x, sound_speed, fc, step_deg=1.0)
         fan = np.clip(c0 + offs, 0.0, 180.0)
-        w = np.exp(-2j * np.pi * f_line * np.outer(x, np.cos(np.radians(fan))) / sound_speed)
+        cf = np.cos(np.radians(fan))
+        f_w = f_line / (1.0 + speed * cf / sound_speed)
+        w = np.exp(-2j * np.pi * np.outer(x, f_w * cf) / sound_speed)
         env = np.abs(zz @ w)
         cone[i0:i1] = fan[np.argmax(env, axis=1)]
         coarse[i0:i1] = c0

@@ -158,13 +158,13 @@ class NarrowbandEKFStage(Stage):
         c = self.ctx.sound_speed
         fc = float(last.meta.fc) if np.iscomplexobj(yy) else 0.0
         band = last.meta.band
+        speed = float(last.pose.speed) if last.pose is not None else 0.0
         r = cbf_track(yy, b0.fs, self._x(last), c, fc=fc, band=tuple(band) if band else None,
-                      coarse_s=BASELINE_WINDOW_S)
+                      coarse_s=BASELINE_WINDOW_S, speed=speed)
         s0 = int(b0.meta.sample0)
         slot = np.floor((s0 + np.arange(yy.shape[0])) * (self.row_rate / b0.fs) + 1e-9)
         keep = slot != np.concatenate([[self._cbf_last_slot], slot[:-1]])
         self._cbf_last_slot = slot[-1]
-        speed = float(last.pose.speed) if last.pose is not None else 0.0
         f = r["freq_hz"] / (1.0 + speed * np.cos(np.radians(r["cone_deg"])) / c)
         k = int(keep.sum())
         if out is not None and k:
