@@ -2,11 +2,14 @@
 
 Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManager` each:
 
-- ``bearings`` (towed line array): rows are associated in cone-angle space, where a line
-  array's measurement is unambiguous, by a bearing / bearing-rate filter per track (nearly
-  constant cone rate, BLK 2001 eq. 6.2.2-12, R from σ_cone / sin θ, the beam widening towards
-  end-fire, thesis eq. 2.9). Rows of one scan closer than ``merge_deg`` (the broadband peak and
-  the tonal lines of one source) form one measurement, its strongest row. Each track's rows
+- ``bearings`` (towed line array): a bearing / bearing-rate filter per track (nearly
+  constant rate, BLK 2001 eq. 6.2.2-12, R from σ_cone / sin θ, the beam widening towards
+  end-fire, thesis eq. 2.9): by default (``space = "bearing"``) a mirrored pair of
+  true-bearing hypotheses weighted by their likelihoods
+  (:mod:`arrayproc.track.manage.mirrored`), which coasts through ownship turns; or
+  (``space = "cone"``) one filter in cone-angle space, where a line array's measurement is
+  unambiguous but swings in turns. Rows of one scan closer than ``merge_deg`` (the broadband
+  peak and the tonal lines of one source) form one measurement, its strongest row. Each track's rows
   then drive a TMA filter — by default the UKF with left-right resolution (L-R paper
   eqs. (9)-(13)), any filter of ``FILTERS`` by ``filter`` — from the same ``[tracker]`` keys as
   single mode.
@@ -24,11 +27,15 @@ Config (``[tracker]`` keys beside those of single mode)::
     gate_prob = 0.999             # P_G
     confirm = [3, 5]              # M of N
     max_misses = 5                # consecutive missed scans of a confirmed track
+    hit_window = [3, 15]          # optional: delete a confirmed track with < 3 hits in 15 scans
     pd = 0.9                      # JPDA detection probability
     clutter_density = 1e-3        # JPDA, false measurements per unit of measurement space
-    [tracker.bearing]             # the cone-angle tracker
+    [tracker.bearing]             # the bearing tracker
+    space = "bearing"             # bearing (mirrored hypotheses) | cone
     sigma_cone_deg = 0.7          # at broadside
-    q_cone = 0.05                 # deg²/s³
+    q_bearing = 0.002             # deg²/s³ (space = "bearing")
+    turn_ref_deg_s = 0.1          # Q × (1 + (heading rate / turn_ref)²)
+    q_cone = 0.05                 # deg²/s³ (space = "cone")
     merge_deg = 4.0
     sigma_rate_deg_s = 0.5        # initial cone-rate σ
     merge_d2 = 4.0                # duplicate confirmed tracks (d² of the cone states)
@@ -67,6 +74,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
+              "hit_window",
               "pd", "clutter_density", "bearing", "contacts", "positions"}
 _SUB = {
     "bearing": {"space": "bearing", "sigma_cone_deg": 0.7, "q_cone": 0.05,
@@ -137,6 +145,13 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
     if isinstance(mm, bool) or not isinstance(mm, int) or mm < 1:
         raise ConfigError(f"{path}: tracker.max_misses must be an integer >= 1")
     cfg["max_misses"] = mm
+    hw = multi.get("hit_window", None)
+    if hw is not None and (not isinstance(hw, list) or len(hw) != 2
+                           or not all(isinstance(v, int) and not isinstance(v, bool)
+                                      for v in hw) or not 1 <= hw[0] <= hw[1]):
+        raise ConfigError(f"{path}: tracker.hit_window must be [K, W] integers, 1 <= K <= W "
+                          "(delete a confirmed track with fewer than K hits in W scans)")
+    cfg["hit_window"] = hw
     pd = _num(path, "pd", multi.get("pd", 0.9))
     if pd > 1:
         raise ConfigError(f"{path}: tracker.pd must be <= 1")
@@ -232,6 +247,11 @@ def bearing_scans(time: np.ndarray, cone: np.ndarray, score: np.ndarray, merge_d
     return out
 
 
+def _window(cfg: dict[str, Any]) -> dict[str, Any]:
+    hw = cfg.get("hit_window")
+    return {} if hw is None else {"window": int(hw[1]), "min_hits": int(hw[0])}
+
+
 def cone_filter(bcfg: dict[str, Any]) -> KalmanBatch:
     """The bearing / bearing-rate (cone, cone-rate) filter: CV with q_cone, R from σ_cone at
     broadside widened by 1 / sin θ (thesis eq. 2.9) down to ``min_sigma_sin``."""
@@ -283,7 +303,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
 
     mgr = TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
                        confirm=cfg["confirm"],
-                       delete=DeletionRule(max_misses=cfg["max_misses"], pos=pos,
+                       delete=DeletionRule(max_misses=cfg["max_misses"], **_window(cfg), pos=pos,
                                            merge_d2=float(b["merge_d2"])),
                        pd=cfg["pd"], clutter_density=cfg["clutter_density"])
     for k, (t, Z, _rows) in enumerate(scans):
@@ -414,7 +434,8 @@ def contacts_manager(cfg: dict[str, Any]) -> TrackManager:
 
     return TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
                         confirm=cfg["confirm"],
-                        delete=DeletionRule(max_misses=cfg["max_misses"], pos=(0, 1)),
+                        delete=DeletionRule(max_misses=cfg["max_misses"], **_window(cfg),
+                                            pos=(0, 1)),
                         pd=cfg["pd"], clutter_density=cfg["clutter_density"])
 
 
@@ -434,7 +455,8 @@ def positions_manager(cfg: dict[str, Any]) -> TrackManager:
 
     return TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
                         confirm=cfg["confirm"],
-                        delete=DeletionRule(max_misses=cfg["max_misses"], pos=(0, 1, 2)),
+                        delete=DeletionRule(max_misses=cfg["max_misses"], **_window(cfg),
+                                            pos=(0, 1, 2)),
                         pd=cfg["pd"], clutter_density=cfg["clutter_density"])
 
 

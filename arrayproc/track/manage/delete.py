@@ -37,6 +37,9 @@ class DeletionRule:
         tracks count as duplicates.
     merge_scans : int
         Consecutive scans as duplicates before the younger is deleted.
+    window, min_hits : int
+        Delete a confirmed track with fewer than ``min_hits`` hits in its last ``window``
+        scans (a false track fed by sporadic clutter); ``window`` None disables the test.
     """
 
     max_misses: int = 5
@@ -45,6 +48,8 @@ class DeletionRule:
     pos: tuple[int, ...] = (0,)
     merge_d2: float | None = None
     merge_scans: int = 3
+    window: int | None = None
+    min_hits: int = 0
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_misses, int) and self.max_misses >= 1):
@@ -55,6 +60,9 @@ class DeletionRule:
                 raise ConfigError(f"deletion: {k} must be > 0")
         if not (isinstance(self.merge_scans, int) and self.merge_scans >= 1):
             raise ConfigError("deletion: merge_scans must be an integer >= 1")
+        if self.window is not None and not (isinstance(self.window, int)
+                                            and 1 <= self.min_hits <= self.window):
+            raise ConfigError("deletion: need integers 1 <= min_hits <= window")
 
     def should_delete(self, track: Track, t: float, last_hit_time: float) -> bool:
         """True when confirmed ``track`` must be deleted at time ``t`` (s), its latest hit at
@@ -62,6 +70,9 @@ class DeletionRule:
         if track.status is not Status.CONFIRMED:
             return False
         if track.misses >= self.max_misses:
+            return True
+        if self.window is not None and len(track.hits) >= self.window \
+                and sum(track.hits[-self.window:]) < self.min_hits:
             return True
         if self.max_coast_s is not None and t - last_hit_time > self.max_coast_s:
             return True
