@@ -81,9 +81,12 @@ def test_info_on_8000_channels_is_cheap(tmp_path):
     pos[:, 1] = np.sin(np.arange(8000))
     with RecordingWriter(p, 1000.0, 8000, positions=pos, chunk_samples=2) as w:
         w.append(np.zeros((2, 8000), np.float32))
-    code = ("import resource, sys\nfrom arrayproc.app.cli import main\n"
+    # VmHWM (this process's peak RSS, kB), not ru_maxrss: Linux carries the parent's peak
+    # into ru_maxrss across fork + exec, so under pytest it would measure pytest.
+    code = ("import sys\nfrom arrayproc.app.cli import main\n"
             f"rc = main(['info', {str(p)!r}])\n"
-            "print('peak', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\nsys.exit(rc)")
+            "hwm = [ln for ln in open('/proc/self/status') if ln.startswith('VmHWM')][0]\n"
+            "print('peak', hwm.split()[1])\nsys.exit(rc)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert "channels: 8000 active of 8000" in r.stdout and "planar" in r.stdout
