@@ -270,7 +270,7 @@ min_range_m = 150.0
 
 
 def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
-                  range_m: float, cone_deg: float) -> dict:
+                  range_m: float, cone_deg: float, reuse: bool = False) -> dict:
     from arrayproc.chain import build_chain, run_chain
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.recording import Recording
@@ -278,18 +278,22 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     from arrayproc.stages import load_all
     load_all()
     t0 = time.perf_counter()
+    if rec_path is None and reuse and (out / "active_hfm_bpsk.h5").exists():
+        rec_path = out / "active_hfm_bpsk.h5"
     rec_path = rec_path or make_alternating(out, duration)
     t_sim = time.perf_counter() - t0
     prod = out / "active_products.h5"
     spec = build_chain(CHAIN.format(range_m=range_m, cone_deg=cone_deg))
     t0 = time.perf_counter()
     c0 = time.process_time()
-    with Recording(rec_path) as rec, ProductsWriter(prod, source=str(rec_path)) as w:
-        run_chain(rec, spec, w)
+    if not (reuse and prod.exists()):
+        with Recording(rec_path) as rec, ProductsWriter(prod, source=str(rec_path)) as w:
+            run_chain(rec, spec, w)
+    t_proc, c_proc = time.perf_counter() - t0, time.process_time() - c0
+    with Recording(rec_path) as rec:
         tr = echo_truth(rec)
         act = rec.active()
         n_el = rec.n_channels
-    t_proc, c_proc = time.perf_counter() - t0, time.process_time() - c0
     g = read_products(prod)
     full = {k: np.asarray(v) for k, v in g["contacts"].items() if k not in ("attrs", "kind",
                                                                             "stage")}
@@ -353,19 +357,44 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     res["max_abs_range_err_cells"] = max((abs(r["range_err_cells"]) for r in det), default=None)
     res["max_abs_range_rate_err"] = max((abs(r["range_rate_err"]) for r in det), default=None)
     res["moving_fraction"] = float(np.mean([r["moving"] for r in det])) if det else None
-    idx = associate(full, tr, range_gate=30.0, cone_gate=10.0)
-    is_cl = (idx >= 0) & (tr["kind"][np.maximum(idx, 0)] == "clutter") & (wv == "bpsk")
-    res["clutter_contacts"] = int(is_cl.sum())
-    res["clutter_static_fraction"] = (float(np.mean(~full["moving"][is_cl].astype(bool)))
-                                      if is_cl.any() else None)
-    res["unassociated_bpsk_contacts"] = int(((idx < 0) & (wv == "bpsk")).sum())
+    # clutter: loose gates (30 m, 10 deg) let false alarms near a clutter echo in, so also
+    # the contact nearest each clutter echo within two range cells and 3 deg
+    sens = wv == "bpsk"
+    for name, rg, cg in (("loose_30m_10deg", 30.0, 10.0), ("tight_2cells_3deg", 2 * cell, 3.0)):
+        idx = associate(full, tr, range_gate=rg, cone_gate=cg)
+        is_cl = (idx >= 0) & (tr["kind"][np.maximum(idx, 0)] == "clutter") & sens
+        keep = []
+        for e in np.unique(idx[is_cl]):  # one contact per echo: the strongest
+            m = np.flatnonzero(is_cl & (idx == e))
+            keep.append(m[np.argmax(full["snr_db"][m])])
+        keep = np.array(keep, int)
+        res[f"clutter_{name}"] = {
+            "contacts": int(is_cl.sum()),
+            "static_fraction_all": (float(np.mean(~full["moving"][is_cl].astype(bool)))
+                                    if is_cl.any() else None),
+            "echoes_detected": int(keep.size),
+            "static_fraction_per_echo": (float(np.mean(~full["moving"][keep].astype(bool)))
+                                         if keep.size else None),
+            "range_rate_err_median": (float(np.median(full["range_rate_mps"][keep]
+                                                      - tr["range_rate_mps"][idx[keep]]))
+                                      if keep.size else None)}
+        if name.startswith("loose"):
+            res["unassociated_bpsk_contacts"] = int(((idx < 0) & sens).sum())
+    res["clutter_echoes_in_bpsk_pings"] = int(np.sum((tr["kind"] == "clutter")
+                                                     & np.isin(tr["ping"], bpsk_pings)))
     if br is not None and rows:
-        cf = sum(r["cells_full"] or 0 for r in rows)
-        cb = sum(r["cells_bracket"] for r in rows)
-        res["bracket"] = {"range_m": range_m, "cone_deg": cone_deg, "cells_full": cf,
-                          "cells_bracket": cb, "cell_fraction": cb / max(cf, 1),
+        with_prev = [r for r in rows if any(n == "hfm" for n in act.waveform[:r["ping"]])]
+        cf = sum(r["cells_full"] or 0 for r in with_prev)
+        cb = sum(r["cells_bracket"] for r in with_prev)
+        res["bracket"] = {"range_m": range_m, "cone_deg": cone_deg,
+                          "pings_with_previous_hfm": [r["ping"] for r in with_prev],
+                          "cells_full": cf, "cells_bracket": cb,
+                          "cell_fraction": cb / max(cf, 1),
                           "same_submarine_contacts": all(
-                              r.get("bracket_detected") == r["detected"] for r in rows)}
+                              r.get("bracket_detected") == r["detected"]
+                              and abs(r.get("bracket_range_m", np.nan) - r["range_m"]) < 0.5
+                              and abs(r.get("bracket_range_rate", np.nan) - r["range_rate"])
+                              < 0.05 for r in with_prev)}
     from arrayproc.plots.contacts import plot_contacts
     plot_contacts(str(prod), str(out / "contacts.png"))
     return res
@@ -381,6 +410,8 @@ def main() -> None:
     ap.add_argument("--bracket-range", type=float, default=200.0)
     ap.add_argument("--bracket-cone", type=float, default=5.0)
     ap.add_argument("--cfar-slow", action="store_true")
+    ap.add_argument("--reuse", action="store_true",
+                    help="scenario: reuse OUT's recording and products when present")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -394,7 +425,8 @@ def main() -> None:
         print(json.dumps(res["cfar"]["pd"][::3], indent=1), flush=True)
     if "scenario" in parts:
         res["scenario"] = part_scenario(out, Path(args.recording) if args.recording else None,
-                                        args.duration, args.bracket_range, args.bracket_cone)
+                                        args.duration, args.bracket_range, args.bracket_cone,
+                                        args.reuse)
         print(json.dumps({k: v for k, v in res["scenario"].items() if k != "submarine"},
                          indent=1), flush=True)
     if args.json:
