@@ -251,6 +251,15 @@ def _str(v: object) -> str:
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
+def _near(path: str, rel_to: str) -> str:
+    """``path`` as given when it exists (or is absolute), else beside ``rel_to``."""
+    import os
+    if not path or os.path.isabs(path) or os.path.exists(path):
+        return path
+    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
+    return cand if os.path.exists(cand) else path
+
+
 def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
                          alpha: float = 2.0, cone_gate_deg: float = 5.0,
                          detect_gate_deg: float = 3.0, towship: bool = True) -> dict:
@@ -292,7 +301,7 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]
     root = prod["/"]
-    rec_path = _str(root.get("recording", ""))
+    rec_path = _near(_str(root.get("recording", "")), tracks_path)
     try:
         rec = Recording(rec_path, require_geometry=False)
     except Exception as e:  # noqa: BLE001 - any open failure is the same user error
@@ -303,7 +312,7 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
         if not srcs:
             raise FormatError(f"{rec_path}: no /truth/sources to score against")
         names = sorted(srcs)
-        meas = read_products(_str(root.get("source", "")))
+        meas = read_products(_near(_str(root.get("source", "")), tracks_path))
         mgroups = {_str(m.get("kind")): m for n, m in meas.items() if n != "/"}
         bearing = "cone_deg" in g
         if bearing and "bearings" in mgroups:
