@@ -20,8 +20,11 @@ KNOT = 1852.0 / 3600.0
 
 @register_plot("contacts")
 def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_kn: float = 2.0,
-                  snr_min_db: float = 15.0, truth: bool = True) -> None:
+                  snr_min_db: float = 15.0, truth: bool = True, range_db: float | None = None,
+                  beam: float | None = None) -> None:
     """Draw the first ``contacts`` group of ``path`` into ``out_png``.
+
+    ``range_db`` and ``beam`` (the ``plot`` command's options) are unused here.
 
     ``doppler_mps`` sets the colour scale (+-, m/s); ``threshold_kn`` the ECDF's marker; only
     contacts of at least ``snr_min_db`` are drawn (the thesis's fig. 4.10 takes the contacts

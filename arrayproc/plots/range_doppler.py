@@ -17,12 +17,16 @@ from arrayproc.plots._passive import find_group
 
 @register_plot("range_doppler")
 def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: int | None = None,
-                       cone: float | None = None, truth: bool = True) -> None:
+                       cone: float | None = None, truth: bool = True,
+                       beam: float | None = None) -> None:
     """Draw one row of the first ``range_doppler`` group of ``path`` into ``out_png``.
 
-    ``ping`` and ``cone`` (deg) pick the row (default: the first row); the colour scale spans
-    ``range_db`` dB below the map's peak.
+    ``ping`` and ``cone`` (deg; ``beam``, the ``plot`` command's ``--beam``, is the same) pick
+    the row (default: the first row); the colour scale spans ``range_db`` dB below the map's
+    peak.
     """
+    if cone is None:
+        cone = beam
     import matplotlib.pyplot as plt
 
     g, root = find_group(path, "range_doppler")
