@@ -81,6 +81,10 @@ _KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2
 
 def load_tracker_config(path: str) -> dict[str, Any]:
     """Read and check a tracker TOML; ConfigError naming the file and key on any problem."""
+    from arrayproc.track.multi import split_config, tracker_mode
+    if tracker_mode(path) == "multi":  # the multi-target keys, then the TMA filter's
+        multi, tma = split_config(path)
+        return {**tma, "mode": "multi", "multi": multi}
     try:
         with open(path, "rb") as fh:
             text = fh.read()
