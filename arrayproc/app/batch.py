@@ -488,7 +488,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
                    else 1)
         link = client.dashboard_link if (cluster is None or _has_bokeh()) else None
         where = f"scheduler {args.scheduler}" if cluster is None else \
-            f"local cluster of {n_workers} workers x {threads} threads"
+            f"local cluster of {n_workers} worker(s) x {threads} thread(s)"
         print(f"arrayproc batch: {len(inputs)} inputs on {where}"
               + (f"; dashboard {link}" if link else ""), file=sys.stderr)
         results = run_batch(inputs, args.chain, args.output, client, args.segment_s,
