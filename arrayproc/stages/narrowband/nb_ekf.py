@@ -7,6 +7,12 @@ frequency; own speed from the navigation through the Doppler factor 1 + U cos θ
 estimated and divided out, thesis 3.2.1.3; re-initialised every ``reinit_s``; two staggered
 filters with ``dual``). Start values: numbers, or ``"auto"`` (the strongest line in the input
 band over the first ``AUTO_SPAN_S`` seconds, then a CBF scan at that line, :mod:`.initial`).
+``align_phase`` (default true) starts each filter with its model phase matched, which removes
+the thesis's sidelobe jumps after re-initialisations at high SNR; ``spatial_doppler`` (default
+true, eq. (3.18) as printed) can be turned off for the exact moving-array phase, which removes
+a cone bias of U cos² θ / c near end-fire (both measured in ``docs/validation/narrowband.md``).
+With ``baseline`` the per-sample CBF of thesis 3.2.1.1 (:mod:`.cbf_baseline`) is written too,
+as group ``<name>_cbf`` with ``filter`` = −1.
 
 Writes products ``nb_tracks`` (DESIGN section 5) at ``output_rate``: ``time`` s, ``cone_deg``,
 ``freq_hz`` (without own Doppler), ``sigma_cone_deg``, ``sigma_freq_hz``, ``filter`` (index of
