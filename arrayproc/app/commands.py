@@ -306,6 +306,10 @@ PLOT_INPUTS: dict[str, tuple[str, dict[str, int], tuple[str, ...], str | None]] 
     "track": ("tracks", {"time": 1, "x": 1, "y": 1}, (), None),
 }
 
+#: What the bearings tracker reads from its products file (same form as PLOT_INPUTS).
+TRACK_INPUT = ("bearings", {"time": 1, "cone_deg": 1, "bearing_port_deg": 1,
+                            "bearing_stbd_deg": 1}, (), None)
+
 
 def check_plot_input(path: str, kind: str) -> None:
     """Refuse a products file whose groups cannot make the ``kind`` plot (FormatError naming
@@ -313,18 +317,26 @@ def check_plot_input(path: str, kind: str) -> None:
     that do not match the data. Only shapes and types are read."""
     if kind not in PLOT_INPUTS:
         return
+    check_product_input(path, kind, PLOT_INPUTS[kind])
+
+
+def check_product_input(path: str, use: str, spec: tuple) -> None:
+    """Refuse a products file whose groups of ``spec``'s kind lack a numeric column of the
+    declared dimensions, have no rows, or axes that do not match (see :data:`PLOT_INPUTS`);
+    ``use`` names the reader in the message."""
     import h5py
 
     from arrayproc.io.products import FORMAT
     from arrayproc.io.recording import _attr_str, get_object, open_h5
-    pkind, cols, axes, axis2 = PLOT_INPUTS[kind]
+    kind = use
+    pkind, cols, axes, axis2 = spec
     with open_h5(path, "products file") as f:
         if _attr_str(f.attrs.get("format", "")) != FORMAT:
             raise FormatError(f"{path}: not an arrayproc products file")
         groups = [n for n in f if isinstance(get_object(f, Path(path), n), h5py.Group)
                   and _attr_str(f[n].attrs.get("kind", "")) == pkind]
         if not groups:
-            raise FormatError(f"{path}: no {pkind} group for a {kind} plot")
+            raise FormatError(f"{path}: no {pkind} group for {kind}")
         for name in groups:
             g = f[name]
             where = f"{path}: group {name!r} (kind {pkind!r})"
@@ -394,6 +406,10 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     if rec is not None:
         inputs.append(rec)  # the recording whose navigation the tracker reads
     check_output(output, inputs)
+    from arrayproc.track.runner import load_tracker_config
+    cfg = load_tracker_config(config)  # configuration errors first, before the products are read
+    if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
+        check_product_input(products, "the tracker", TRACK_INPUT)
     from arrayproc.track.runner import run_tracker
     run_tracker(products, config, output, progress=progress)
 

@@ -664,8 +664,26 @@ for _id, _text, _m in [
     CASES.append(Case("tracker_" + _id, K, (lambda t: lambda d: tracker_text(d, t))(_text), _m))
 
 
+@case("malformed products", "must be numeric")
+def track_string_time_column(d):
+    p = edit_h5(d, lambda f: None, "x.h5")
+    p.write_bytes((d / "prod.h5").read_bytes())
+    with h5py.File(p, "r+") as f:
+        del f["bearings/time"]
+        f["bearings/time"] = np.array([b"a"] * 5)
+    return ["track", str(p), "-c", str(d / "tracker.toml"), "-o", str(d / "out.h5")]
+
+
+@case("malformed products", "no bearings group")
+def track_products_without_bearings(d):
+    p = d / "nob.h5"
+    with ProductsWriter(p, source="rec.h5") as w:
+        w.group("power", "power").append(time=np.arange(2.0), power_db=np.zeros((2, 2)))
+    return ["track", str(p), "-c", str(d / "tracker.toml"), "-o", str(d / "out.h5")]
+
+
 # == 10. malformed products given to plot ==========
-P = "products to plot"
+P = "malformed products"
 
 
 def _products(d: Path, fill: Callable[[ProductsWriter], None]) -> Path:
