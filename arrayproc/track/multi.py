@@ -475,6 +475,8 @@ def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarr
     if nav is not None:
         own, _ = ownship_states(nav, h["time"])
         out["own_x"], out["own_y"] = own[:, 0], own[:, 1]
+    else:  # no recording named: the ownship is unknown
+        out["own_x"] = out["own_y"] = np.full(h["time"].size, np.nan)
     return out
 
 
