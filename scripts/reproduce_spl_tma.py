@@ -79,6 +79,26 @@ def rmse(err: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean(err**2, axis=0))
 
 
+_CLIENT: list = []
+
+
+def _spread_rpf(args, cfg, data, use: bool, seeds: np.ndarray):
+    """The runs in slices of ``--chunk`` on Dask (:func:`arrayproc.evaluate.distributed.
+    rpf_slice`); each run keeps its own seed, so the result equals one process's."""
+    from types import SimpleNamespace
+
+    from arrayproc.app.batch import start_client
+    from arrayproc.evaluate.distributed import rpf_slice, spread_slices
+    if not _CLIENT:
+        _CLIENT.extend(start_client(args.workers, args.scheduler))
+    parts = spread_slices(rpf_slice, args.runs, _CLIENT[0], args.chunk, config=cfg,
+                          times=data.times, observer_pos=data.observer_pos,
+                          bearings_deg=data.bearings_deg,
+                          levels_db=data.levels_db if use else None, seeds=seeds)
+    return SimpleNamespace(est=np.concatenate([p[0] for p in parts]),
+                           resampled=np.concatenate([p[1] for p in parts]))
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", required=True, choices=["manoeuvring", "parallel", "static"])
@@ -106,6 +126,12 @@ def main(argv: list[str] | None = None) -> dict:
                          "this many runs (diagnostic)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--plot", default=None, help="directory for the PNG figures")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="spread the runs over a local Dask cluster of N workers (per-run seeds: "
+                         "the same numbers as one process; docs/scale-out.md); the wall times "
+                         "then include the cluster's start and the workers' JIT")
+    ap.add_argument("--scheduler", default=None, help="an existing Dask scheduler instead")
+    ap.add_argument("--chunk", type=int, default=10, help="runs per Dask task")
     args = ap.parse_args(argv)
     if args.grid_check and args.truth_sigma_a > 0:
         ap.error("--grid-check needs the deterministic truth (--truth-sigma-a 0)")
@@ -133,9 +159,12 @@ def main(argv: list[str] | None = None) -> dict:
         f.run_many(data.times[:3], data.observer_pos[:3], data.bearings_deg[:1, :3],
                    data.levels_db[:1, :3] if use else None)          # compile outside timing
         t0 = time.perf_counter()
-        res = f.run_many(data.times, data.observer_pos, data.bearings_deg,
-                         data.levels_db if use else None,
-                         seeds=run_seeds(args.seed, args.runs, tag=1 + int(use)))
+        seeds = run_seeds(args.seed, args.runs, tag=1 + int(use))
+        if args.workers or args.scheduler:
+            res = _spread_rpf(args, cfg, data, use, seeds)
+        else:
+            res = f.run_many(data.times, data.observer_pos, data.bearings_deg,
+                             data.levels_db if use else None, seeds=seeds)
         out[f"wall_s_{label}"] = time.perf_counter() - t0
         err = sc.position_error(res.est, data.truth)
         rm[label] = rmse(err)
