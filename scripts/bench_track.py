@@ -7,6 +7,12 @@ Python UKF, one run after another. Prints runs/second and the ratio. Also times 
 per-step Python interface (the ``UKF`` class) for reference.
 
     python scripts/bench_track.py [--runs 20000] [--fp-runs 100] [--json OUT]
+
+``--cpu RUNS`` only times the fused L-R kernel on one thread (CPU ms per run, min of 5
+repeats) for paired A/B comparisons with another checkout:
+
+    PYTHONPATH=/tmp/wt_before python scripts/bench_track.py --cpu 600
+    PYTHONPATH=. python scripts/bench_track.py --cpu 600
 """
 
 from __future__ import annotations
@@ -20,15 +26,18 @@ import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 from arrayproc.evaluate.montecarlo import LRScenario, run_case
-from arrayproc.track.filters import UKF
-from arrayproc.track.init import init_from_bearing
-from arrayproc.track.models.bearing import Bearing, bearing_residual, bearing_sigma_mean
-from arrayproc.track.models.motion import constant_velocity
-from arrayproc.track.state import Context
+
+# the component imports are inside the functions that use them, so that ``--cpu`` also runs
+# against a checkout from before the components (paired A/B)
 
 
 def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
     """Seconds for filterpy's UKF over every row of y1."""
+    from arrayproc.track.init import init_from_bearing
+    from arrayproc.track.models.bearing import bearing_residual, bearing_sigma_mean
+    from arrayproc.track.models.motion import constant_velocity
+    from arrayproc.track.state import Context
+
     g = scn.geometry()
     model = constant_velocity()
     pts = MerweScaledSigmaPoints(4, alpha=1.0, beta=0.0, kappa=-1.0)
@@ -56,6 +65,12 @@ def filterpy_runs(scn: LRScenario, y1: np.ndarray, draws: np.ndarray) -> float:
 def class_runs(scn: LRScenario, y1: np.ndarray) -> float:
     """Seconds for our per-step UKF object (predict/update with the bearing model) over every
     row of y1."""
+    from arrayproc.track.filters import UKF
+    from arrayproc.track.init import init_from_bearing
+    from arrayproc.track.models.bearing import Bearing
+    from arrayproc.track.models.motion import constant_velocity
+    from arrayproc.track.state import Context
+
     g = scn.geometry()
     model = constant_velocity()
     meas = Bearing(sigma_deg=scn.sigma_deg)
@@ -70,13 +85,43 @@ def class_runs(scn: LRScenario, y1: np.ndarray) -> float:
     return time.perf_counter() - t0
 
 
+def cpu_per_run(runs: int, repeats: int = 5) -> dict[str, float]:
+    """CPU ms per run (min of ``repeats``) of the fused L-R kernel, resolved, one thread, for
+    EKF/UKF/GHF on Cases I and II. Uses only ``run_case``, so the same script times an older
+    checkout: ``PYTHONPATH=<checkout> python scripts/bench_track.py --cpu 600`` (paired A/B)."""
+    out = {}
+    for case in (1, 2):
+        scn = LRScenario(case=case)
+        meas = scn.measurements(runs, 5)
+        for name in ("ukf", "ghf", "ekf"):
+            run_case(scn, name, True, 4, 0, meas=tuple(m[:4] for m in meas), threads=1)
+            best = math.inf
+            for _ in range(repeats):
+                c = time.process_time()
+                run_case(scn, name, True, runs, 0, meas=meas, threads=1)
+                best = min(best, time.process_time() - c)
+            out[f"case{case}_{name}_cpu_ms_per_run"] = 1e3 * best / runs
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cpu", type=int, default=0, metavar="RUNS",
+                    help="only the one-thread CPU time per run of the fused L-R kernel "
+                         "(min of 5 repeats of RUNS runs), for paired A/B comparisons")
     ap.add_argument("--runs", type=int, default=20000, help="runs for our kernel")
     ap.add_argument("--fp-runs", type=int, default=100, help="runs for filterpy")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", help="write the numbers here")
     a = ap.parse_args(argv)
+    if a.cpu:
+        res = cpu_per_run(a.cpu)
+        for k, v in res.items():
+            print(f"{k:<32}{v:10.3f}")
+        if a.json:
+            with open(a.json, "w") as fh:
+                json.dump(res, fh, indent=2)
+        return 0
     scn = LRScenario(case=1, random_init=False)
     meas = scn.measurements(a.runs, a.seed)
     run_case(scn, "ukf", False, 4, a.seed)  # compile / load the cache
