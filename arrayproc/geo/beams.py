@@ -9,8 +9,9 @@ import numpy as np
 from arrayproc.errors import ConfigError
 
 
-def _whole(v: object) -> int:
-    """A beam count: a TOML integer (not a fraction, a string or a boolean)."""
+def beam_count(v: object) -> int:
+    """A beam count: a TOML integer (not a fraction, a string or a boolean); TypeError
+    otherwise."""
     if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
         raise TypeError(f"count must be an integer, got {v!r}")
     return int(v)
@@ -26,7 +27,7 @@ def beam_directions(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
     keys = set(beams)
     if keys <= {"start", "stop", "count", "spacing"} and {"start", "stop", "count"} <= keys:
         try:
-            a, b, n = float(beams["start"]), float(beams["stop"]), _whole(beams["count"])
+            a, b, n = float(beams["start"]), float(beams["stop"]), beam_count(beams["count"])
         except (TypeError, ValueError):
             raise ConfigError("key 'beams': start, stop must be numbers and count an "
                               "integer") from None
@@ -65,7 +66,7 @@ def beam_directions(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
 def cone_axis(beams: dict) -> np.ndarray:
     """Cone angles (deg) of a ``{start, stop, count}`` beams table."""
     try:
-        a, b, n = float(beams["start"]), float(beams["stop"]), _whole(beams["count"])
+        a, b, n = float(beams["start"]), float(beams["stop"]), beam_count(beams["count"])
     except (KeyError, TypeError, ValueError):
         raise ConfigError("key 'beams': expected {start, stop, count} cone angles (deg)") from None
     if n < 1 or not (0 <= a <= 180 and 0 <= b <= 180) or set(beams) - {"start", "stop", "count"}:

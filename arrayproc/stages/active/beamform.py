@@ -24,6 +24,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from arrayproc.errors import ConfigError
+from arrayproc.geo.beams import beam_count
 
 from . import _kernels as K
 from .bank import BandPlan
@@ -48,7 +49,7 @@ def beam_axis(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
     keys = set(beams)
     if {"start", "stop", "count"} <= keys <= {"start", "stop", "count"}:
         try:
-            a, b, n = float(beams["start"]), float(beams["stop"]), int(beams["count"])
+            a, b, n = float(beams["start"]), float(beams["stop"]), beam_count(beams["count"])
         except (TypeError, ValueError):
             raise ConfigError("key 'beams': start, stop must be numbers and count an "
                               "integer") from None
