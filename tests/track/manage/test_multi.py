@@ -185,3 +185,22 @@ def test_config_errors(tmp_path):
         p.write_text("[tracker]\n" + text + "\n")
         with pytest.raises(ConfigError, match=key):
             split_config(str(p))
+
+
+def test_contacts_mode_end_to_end(tmp_path):
+    from .conftest import contact_files
+    _rec, prod, final = contact_files(tmp_path)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[tracker]\nmode = "multi"\nmeasurements = "contacts"\n[tracker.contacts]\n'
+                   'sigma_bearing_deg = 1.0\nsigma_range_m = 15.0\nsigma_range_rate_mps = 0.2\n')
+    out = tmp_path / "t.h5"
+    run_tracker(prod, str(cfg), str(out))
+    g = read_products(str(out))["tracks"]
+    st = status_names(g["status"])
+    ends = []
+    for tid in np.unique(g["track_id"][st == "confirmed"]):
+        last = np.flatnonzero((g["track_id"] == tid) & (st == "confirmed"))[-1]
+        ends.append([g["x"][last], g["y"][last]])
+    assert len(ends) == 2
+    d = np.linalg.norm(np.array(ends)[:, None] - final[None], axis=-1)
+    assert d.min(1).max() < 100.0

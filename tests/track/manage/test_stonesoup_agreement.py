@@ -9,52 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from arrayproc.io.products import ProductsWriter
-from arrayproc.io.recording import RecordingWriter
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.tracks import Status
 from arrayproc.track.multi import contact_scans, contacts_manager
 
 pytest.importorskip("stonesoup")
 
-SIG = (1.0, 15.0, 0.2)
-
-
-def _files(tmp_path, seed=4):
-    rng = np.random.default_rng(seed)
-    rec = tmp_path / "rec.h5"
-    with RecordingWriter(rec, 100.0, 1, start_time="2026-01-01T00:00:00Z") as w:
-        w.append(np.zeros((100, 1), np.float32))
-        w.set_nav(np.array([0.0, 1000.0]), np.array([[0.0, 0.0], [0.0, 0.0]]),
-                  np.array([0.0, 0.0]))
-    x0 = np.array([[4000.0, 3000.0, -4.0, 1.0], [-2000.0, 6000.0, 3.0, -3.0]])
-    t = np.arange(40) * 10.0
-    rows = {k: [] for k in ("time", "range_m", "cone_deg", "bearing_port_deg",
-                            "bearing_stbd_deg", "range_rate_mps", "ping",
-                            "absolute_doppler_mps", "snr_db", "moving")}
-    truth = x0[:, None, :2] + t[None, :, None] * x0[:, None, 2:]
-    for k, tk in enumerate(t):
-        for s in range(2):
-            d = truth[s, k]
-            v = x0[s, 2:]
-            r = float(np.hypot(*d))
-            b = math.degrees(math.atan2(d[0], d[1])) + SIG[0] * rng.standard_normal()
-            rows["time"].append(tk)
-            rows["range_m"].append(r + SIG[1] * rng.standard_normal())
-            rows["cone_deg"].append(b % 360)
-            rows["bearing_port_deg"].append(b % 360)
-            rows["bearing_stbd_deg"].append(b % 360)
-            rows["range_rate_mps"].append(float(d @ v) / r + SIG[2] * rng.standard_normal())
-            rows["ping"].append(k)
-            rows["absolute_doppler_mps"].append(rows["range_rate_mps"][-1])
-            rows["snr_db"].append(20.0)
-            rows["moving"].append(True)
-    prod = tmp_path / "prod.h5"
-    with ProductsWriter(prod, source=str(rec)) as w:
-        w.group("contacts", "contacts").append(
-            **{k: np.array(v) for k, v in rows.items()},
-            waveform=np.array([b"cw"] * len(rows["time"])))
-    return str(rec), str(prod), truth[:, -1]
+from .conftest import SIG
+from .conftest import contact_files as _files
 
 
 def test_two_targets_agree_with_stonesoup(tmp_path):
