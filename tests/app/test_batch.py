@@ -207,7 +207,7 @@ def test_worker_killed_mid_task_and_batch_completes(tmp_path, client, chain_file
     task again and every output is complete and equal to a clean run's."""
     d = tmp_path / "r"
     d.mkdir()
-    recs = [make_recording(d / f"k{i}.h5", 20.0, 10 + i) for i in range(2)]
+    recs = [make_recording(d / f"k{i}.h5", 12.0, 10 + i) for i in range(2)]
     out = tmp_path / "out"
     killed: list[str] = []
 
