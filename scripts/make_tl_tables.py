@@ -1,6 +1,6 @@
 #!/usr/bin/env python
-"""Build the cached TL tables in data/tl/ for the SPL paper's appendix environment and compare
-the models.
+"""Build the cached TL tables in arrayproc/data/tl/ for the SPL paper's appendix environment and
+compare the models.
 
 Tables written:
   munk_bellhopcxx_incoherent.h5   bellhopcxx, 'IG' (the paper's model and mode), receiver depths
@@ -12,9 +12,9 @@ Tables written:
   munk_ram_band_300m.h5           RAM PE (pyram), converged grid, intensity averaged 45-55 Hz
 
 The comparison (smoothed over ±500 m in range, receiver at 300 m, 1-30 km) goes to
-``--json`` (default data/tl/tl_comparison.json).
+``--json`` (default arrayproc/data/tl/tl_comparison.json).
 
-Usage: python scripts/make_tl_tables.py [--out data/tl] [--json FILE] [--skip-ram]
+Usage: python scripts/make_tl_tables.py [--out arrayproc/data/tl] [--json FILE] [--skip-ram]
        python scripts/make_tl_tables.py --plot DIR     (figures from the cached tables only)
 """
 
@@ -89,7 +89,8 @@ def plot_tables(tl_dir: Path, out_dir: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "data" / "tl"))
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "arrayproc" / "data"
+                                         / "tl"))
     ap.add_argument("--json", default=None)
     ap.add_argument("--skip-ram", action="store_true")
     ap.add_argument("--plot", default=None, help="only draw figures from the cached tables")

@@ -1,5 +1,5 @@
 """Plain-numpy reference of the RPF (SPL paper section 4) driven by the same random stream as
-the numba kernels (SplitMix64, documented draw order in arrayproc.track._pf_kernels).
+the numba kernels (SplitMix64, documented draw order in arrayproc.track.filters._pf_kernels).
 
 Written independently of the kernels: vectorised numpy over particles, a Python replica of the
 generator, textbook forms of each equation (two-pass covariance, np.cumsum/searchsorted
