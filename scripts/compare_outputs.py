@@ -101,7 +101,7 @@ def _attrs_diff(where: str, a: h5py.AttributeManager, b: h5py.AttributeManager,
 def compare_files(pa: Path, pb: Path) -> list[str]:
     diffs: list[str] = []
     # paths of the inputs and the software version may differ between two checkouts
-    ignore = {"source", "software_version", "chain_path", "config_path"}
+    ignore = {"source", "software_version", "chain_path", "config_path", "recording"}
     with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
         diffs += _attrs_diff("/", fa.attrs, fb.attrs, ignore)
         ia, ib = _items(fa), _items(fb)
@@ -133,7 +133,9 @@ def compare(a: Path, b: Path) -> int:
         for line in d[:20]:
             print("   ", line)
         bad += bool(d)
-    print(f"{len(fa | fb)} files, {bad} differ")
+    both = len(fa & fb)
+    print(f"{len(fa | fb)} files, {both} in both, {bad} differ "
+          f"({len(fb - fa)} only in B: chains or trackers that A does not have)")
     return 1 if bad else 0
 
 
