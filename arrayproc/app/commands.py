@@ -493,28 +493,6 @@ def export(files: Sequence[str], to: str, output: str,
     return n
 
 
-# -- demo -------------------------------------------------------------------------------------
-def demo(output: str = "demo_out", progress: bool = False, echo: Echo = print) -> Path:
-    """Simulate, process, track and plot the bundled examples (see :mod:`arrayproc.app.demo`).
-
-    Parameters
-    ----------
-    output : str
-        Output directory (created; must not be an existing file).
-    progress : bool
-        Progress bars on stderr.
-    echo : callable
-        Where the steps are announced.
-
-    Returns
-    -------
-    Path
-        The output directory.
-    """
-    from arrayproc.app.demo import run_demo
-    return run_demo(output, progress=progress, echo=echo)
-
-
 # -- command line -----------------------------------------------------------------------------
 def add_geometry_options(p: argparse.ArgumentParser) -> None:
     """``--line N SPACING`` / ``--geometry FILE`` (mutually exclusive)."""
@@ -598,14 +576,9 @@ def _run_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_demo(args: argparse.Namespace) -> int:
-    demo(args.output, progress=progress_wanted(args))
-    return 0
-
-
 def add_parser(sub: Any) -> None:
-    """Register this module's sub-commands (info, process, import, simulate, plot, track,
-    demo) on the command line's sub-parsers."""
+    """Register this module's sub-commands (info, process, import, simulate, plot, track, tma,
+    export) on the command line's sub-parsers (the demo registers itself, app/demo.py)."""
     s = sub.add_parser("info", help="describe a recording or products file")
     s.add_argument("file")
     add_geometry_options(s)
@@ -681,7 +654,3 @@ def add_parser(sub: Any) -> None:
                    metavar=("LAT", "LON"), help="rep: latitude/longitude of x = y = 0 (deg)")
     s.set_defaults(func=_run_export)
 
-    s = sub.add_parser("demo", help="simulate, process, track and plot the bundled example")
-    s.add_argument("-o", "--output", default="demo_out", help="output directory")
-    s.add_argument("--no-progress", action="store_true")
-    s.set_defaults(func=_run_demo)

@@ -14,10 +14,12 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from arrayproc.app import commands
 from arrayproc.data import data_path
@@ -122,3 +124,16 @@ def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
         commands.info(str(out / "xav_power.h5"), echo=echo)
     print(f"demo outputs in {out}/", file=sys.stderr)
     return out
+
+
+def _run(args: argparse.Namespace) -> int:
+    run_demo(args.output, progress=commands.progress_wanted(args))
+    return 0
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``arrayproc demo`` on the command line's sub-parsers."""
+    s = sub.add_parser("demo", help="simulate, process, track and plot the bundled examples")
+    s.add_argument("-o", "--output", default="demo_out", help="output directory")
+    s.add_argument("--no-progress", action="store_true")
+    s.set_defaults(func=_run)

@@ -100,7 +100,7 @@ def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
     from arrayproc.io.exports import _recording_info
     from arrayproc.io.products import read_products
     from arrayproc.io.recording import Recording
-    from arrayproc.track.runner import ownship_states
+    from arrayproc.track.single import ownship_states
 
     prod = read_products(r.path)
     groups = {str(g.get("kind")): g for n, g in prod.items() if n != "/"}

@@ -108,10 +108,10 @@ def _num(path: str, key: str, v: Any, lo: float = 0.0, strict: bool = True) -> f
 
 def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """Read a multi-mode tracker TOML: (multi settings, the single-mode keys for the TMA
-    filter, validated by :func:`arrayproc.track.runner.load_tracker_config`)."""
+    filter, validated by :func:`arrayproc.track.single.load_single_config`)."""
     import tempfile
 
-    from arrayproc.track.runner import load_tracker_config
+    from arrayproc.track.single import load_single_config
     try:
         with open(path, "rb") as fh:
             doc = tomllib.load(fh)
@@ -182,7 +182,7 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
         tmp = fh.name
         fh.write(_toml_table("tracker", single))
     try:
-        tma = load_tracker_config(tmp)
+        tma = load_single_config(tmp)
     except ConfigError as e:
         raise ConfigError(str(e).replace(tmp, path)) from None
     finally:
@@ -275,7 +275,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     coasted), ``meta['cone']``, ``meta['sigma_cone']`` and ``meta['stbd_weight']`` its cone
     angle (deg), σ and starboard weight (NaN in cone space)."""
     from arrayproc.track.manage.mirrored import MirroredBearingBatch
-    from arrayproc.track.runner import ownship_states
+    from arrayproc.track.single import ownship_states
 
     b = cfg["bearing"]
     s0, sr, smin = float(b["sigma_cone_deg"]), float(b["sigma_rate_deg_s"]), \
@@ -335,10 +335,10 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
     """TMA of one cone track: its rows' port/starboard bearings through the configured filter
     (UKF with left-right resolution by default) from its first row — the two hypotheses fed
     by side (``by_side``, starboard and port members) or by continuity
-    (:func:`~arrayproc.track.runner.assign_by_continuity`); between rows (coasting)
+    (:func:`~arrayproc.track.single.assign_by_continuity`); between rows (coasting)
     the state is predicted with constant velocity. Returns the rows to write, or None when the
     track has fewer than two rows."""
-    from arrayproc.track.runner import assign_by_continuity, ownship_states, track_bearings
+    from arrayproc.track.single import assign_by_continuity, ownship_states, track_bearings
 
     h = tr.arrays()
     rows = tr.meta["rows"]
@@ -397,7 +397,7 @@ def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool
     """Scans of contacts (one per distinct time): Z (m, 3) [bearing rad, range m, range rate
     m/s], products rows (m,), and the ownship state (4,). With ``mirror`` a contact whose port
     and starboard bearings differ enters twice."""
-    from arrayproc.track.runner import ownship_states
+    from arrayproc.track.single import ownship_states
 
     t = c["time"]
     out = []
@@ -461,7 +461,7 @@ def positions_manager(cfg: dict[str, Any]) -> TrackManager:
 
 
 def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarray]:
-    from arrayproc.track.runner import ownship_states
+    from arrayproc.track.single import ownship_states
 
     h = tr.arrays()
     X, P = h["x"], h["P"]
@@ -585,7 +585,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     import os
 
     from arrayproc.io.products import ProductsWriter, read_products
-    from arrayproc.track.runner import _read_nav, _resolve
+    from arrayproc.track.single import _read_nav, _resolve
 
     cfg, tma_cfg = split_config(config_path)
     if not os.path.exists(products_path):
