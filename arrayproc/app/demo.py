@@ -27,6 +27,9 @@ from arrayproc.errors import FormatError
 
 DATA = data_path()
 
+#: Seconds of the active scenario the demo simulates and processes (two pings).
+ACTIVE_DEMO_S = 65.0
+
 
 def field_recording_dir() -> Path | None:
     """The six-hydrophone field recording: ``$ARRAYPROC_XAV``, else ``shared/data/xav-large-array``
@@ -92,11 +95,21 @@ def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
         step(f"plot lofar (beam 56 deg) -> {out / 'lofar.png'}")
         commands.plot(str(prod), str(out / "lofar.png"), kind="lofar", beam=56.0)
         tracks = out / "towed_passive_tracks.h5"
-        tracker = DATA / "trackers" / "towed_demo.toml"
-        step(f"track {prod.name} with {tracker.name} -> {tracks}")
+        tracker = DATA / "trackers" / "multi_target.toml"
+        step(f"track every contact of {prod.name} with {tracker.name} -> {tracks}")
         commands.track(str(prod), str(tracker), str(tracks), progress=progress)
         step(f"plot track -> {out / 'track.png'}")
         commands.plot(str(tracks), str(out / "track.png"), kind="track")
+        step(f"plot metrics (GOSPA against truth) -> {out / 'track_metrics.png'}")
+        commands.plot(str(tracks), str(out / "track_metrics.png"), kind="metrics")
+        step(f"export {tracks.name} to Debrief REP -> {out / 'towed_passive_tracks.rep'}")
+        commands.export([str(tracks)], "rep", str(out / "towed_passive_tracks.rep"))
+        nb = out / "towed_passive_narrowband.h5"
+        step(f"process {rec.name} with narrowband.toml -> {nb}")
+        commands.process(str(rec), str(DATA / "chains" / "narrowband.toml"), str(nb),
+                         progress=progress)
+        step(f"plot nb_tracks -> {out / 'nb_tracks.png'}")
+        commands.plot(str(nb), str(out / "nb_tracks.png"), kind="nb_tracks")
     scenario = DATA / "scenarios" / "towed_synthetic_aperture.toml"
     if scenario.exists():
         rec = out / "synthetic_aperture.h5"
@@ -122,6 +135,32 @@ def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
         commands.process(str(rec), str(DATA / "chains" / "power.toml"),
                          str(out / "xav_power.h5"), progress=progress)
         commands.info(str(out / "xav_power.h5"), echo=echo)
+        prod = out / "xav_localise.h5"
+        step(f"process {rec.name} with xav_localise.toml -> {prod}")
+        commands.process(str(rec), str(DATA / "chains" / "xav_localise.toml"), str(prod),
+                         progress=progress)
+        commands.info(str(prod), echo=echo)
+        for kind, extra in (("detections", {"range_db": 50.0}), ("positions", {}),
+                            ("delays", {})):
+            step(f"plot {kind} -> {out / f'xav_{kind}.png'}")
+            commands.plot(str(prod), str(out / f"xav_{kind}.png"), kind=kind, **extra)
+        step(f"export detections to a Raven selection table -> {out / 'xav_detections.txt'}")
+        commands.export([str(prod)], "raven", str(out / "xav_detections.txt"))
+    scenario = DATA / "scenarios" / "active_bpsk.toml"
+    chain = DATA / "chains" / "active.toml"
+    if scenario.exists() and chain.exists():
+        rec = out / "active_bpsk.h5"
+        prod = out / "active_products.h5"
+        step(f"simulate {scenario.name} (first {ACTIVE_DEMO_S:g} s) -> {rec}")
+        commands.simulate(str(scenario), str(rec), duration=ACTIVE_DEMO_S, progress=progress)
+        step(f"process {rec.name} with {chain.name} -> {prod}")
+        commands.process(str(rec), str(chain), str(prod), progress=progress)
+        commands.info(str(prod), echo=echo)
+        step(f"plot contacts -> {out / 'active_contacts.png'}")
+        commands.plot(str(prod), str(out / "active_contacts.png"), kind="contacts")
+        step(f"plot range_doppler -> {out / 'active_range_doppler.png'}")
+        commands.plot(str(prod), str(out / "active_range_doppler.png"), kind="range_doppler",
+                      beam=50.0, range_db=30.0)
     print(f"demo outputs in {out}/", file=sys.stderr)
     return out
 
