@@ -40,8 +40,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from arrayproc.errors import ArrayprocError, ConfigError, FormatError
 
 INSTALL_HINT = ("arrayproc batch needs dask.distributed, which is not installed: install the "
@@ -150,6 +148,8 @@ def task_seeds(root: int, n_inputs: int, n_segments: Sequence[int]) -> list[list
     list of list of int
         ``seeds[i][j]`` for input i, segment j.
     """
+    import numpy as np  # here, not at import: `arrayproc --version` stays light
+
     children = np.random.SeedSequence(root).spawn(n_inputs)
     return [[int(s.generate_state(1, np.uint64)[0]) for s in c.spawn(n)]
             for c, n in zip(children, n_segments)]
