@@ -60,6 +60,7 @@ from typing import Any
 
 import numpy as np
 
+from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.track.manage.delete import DeletionRule
@@ -112,13 +113,7 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
     import tempfile
 
     from arrayproc.track.single import load_single_config
-    try:
-        with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
-    except OSError as e:
-        raise ConfigError(f"{path}: cannot read tracker config: {e.strerror}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    doc, _ = read_toml(path, "tracker")
     t = doc.get("tracker")
     if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.angles import wrap_pi
 from arrayproc.geo.nav import Nav
@@ -69,9 +70,9 @@ from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 from arrayproc.track.state import Context
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover
-    import tomli as tomllib
+    pass
 
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
@@ -81,15 +82,7 @@ _KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2
 
 def load_single_config(path: str) -> dict[str, Any]:
     """Read and check a single-target tracker TOML; ConfigError naming the file and key."""
-    try:
-        with open(path, "rb") as fh:
-            text = fh.read()
-    except OSError as e:
-        raise ConfigError(f"{path}: cannot read tracker config: {e.strerror}") from None
-    try:
-        doc = tomllib.loads(text.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    doc, _ = read_toml(path, "tracker")
     if "tracker" not in doc or not isinstance(doc["tracker"], dict):
         raise ConfigError(f"{path}: missing [tracker] table")
     cfg = dict(doc["tracker"])

@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import Param, positive
+from arrayproc.config import Param, positive, read_toml
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
@@ -58,9 +58,9 @@ from .result import TmaSolution
 from .td_tma import solve_delays
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover
-    import tomli as tomllib
+    pass
 
 __all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements"]
 
@@ -115,15 +115,7 @@ def load_tma_config(path: str) -> dict[str, Any]:
     dict
         Every key of :data:`PARAMS`, defaults filled in.
     """
-    try:
-        with open(path, "rb") as fh:
-            text = fh.read()
-    except OSError as e:
-        raise ConfigError(f"{path}: cannot read TMA config: {e.strerror}") from None
-    try:
-        doc = tomllib.loads(text.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    doc, _ = read_toml(path, "TMA")
     if not isinstance(doc.get("tma"), dict):
         raise ConfigError(f"{path}: missing [tma] table")
     raw = doc["tma"]
