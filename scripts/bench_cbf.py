@@ -81,10 +81,12 @@ def make_stage(threads: int) -> CBF:
 _CPU: dict[str, list[float]] = {}
 
 
-def time_stage(stage, seconds: float) -> float:
-    """Wall time (s) of ``stage.process`` over ``seconds`` of :func:`source` data."""
+def time_stage(stage, seconds: float, src=None) -> float:
+    """Wall time (s) of ``stage.process`` over ``seconds`` of :func:`source` data (or of
+    ``src(seconds)``)."""
+    blocks = (src or source)(seconds)
     t = time.perf_counter()
-    for _ in stage.process(source(seconds)):
+    for _ in stage.process(blocks):
         pass
     return time.perf_counter() - t
 
