@@ -1,5 +1,5 @@
-"""Selection of the DFT bins inside a frequency band, with one error message for an empty
-selection."""
+"""Selection of the DFT bins inside a frequency band: by frequency axis (:func:`band_bins`, one
+error message for an empty selection) or as a contiguous rfft slice (:func:`band_slice`)."""
 
 from __future__ import annotations
 
@@ -17,3 +17,31 @@ def band_bins(freqs: np.ndarray, band: list[float] | None, where: str) -> np.nda
         raise ConfigError(f"{where}: key 'band' {band} holds none of the input's bins "
                           f"({freqs[0]:g}-{freqs[-1]:g} Hz)")
     return idx
+
+
+def band_slice(nfft: int, fs: float, band: tuple[float, float] | None) -> tuple[int, int]:
+    """First and one-past-last rfft bin of ``band`` (Hz) for an ``nfft``-point transform.
+
+    Parameters
+    ----------
+    nfft : int
+        Transform length, samples.
+    fs : float
+        Sample rate, Hz.
+    band : (lo, hi) Hz or None
+        None: every bin but DC.
+
+    Returns
+    -------
+    k1, k2 : int
+        Bins ``k1 <= k < k2`` with ``lo <= k fs/nfft <= hi``.
+    """
+    nb = nfft // 2 + 1
+    if band is None:
+        return 1, nb
+    df = fs / nfft
+    k1 = max(0, int(np.ceil(band[0] / df - 1e-9)))
+    k2 = min(nb, int(np.floor(band[1] / df + 1e-9)) + 1)
+    if k2 - k1 < 2:
+        raise ValueError(f"band {band} Hz holds fewer than 2 bins at nfft={nfft}, fs={fs}")
+    return k1, k2

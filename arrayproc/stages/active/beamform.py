@@ -23,57 +23,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft as sfft
 
-from arrayproc.errors import ConfigError
-from arrayproc.geo.beams import beam_count
+from arrayproc.geo.beams import beam_directions as beam_axis  # noqa: F401  (one beams table)
 
 from . import _kernels as K
 from .bank import BandPlan
-
-
-def beam_axis(beams: dict) -> tuple[np.ndarray, np.ndarray, str]:
-    """Parse a ``beams`` table.
-
-    Parameters
-    ----------
-    beams : dict
-        ``{start, stop, count}`` (cone angles, deg) or ``{bearings, elevations}`` (deg).
-
-    Returns
-    -------
-    axis : ndarray
-        Cone angles (B,) deg, or (B, 2) [bearing, elevation] deg.
-    dirs : (B, 3) ndarray
-        Body-frame unit vectors towards the beam (cone beams: only x = cos(cone) used).
-    mode : {"cone", "3d"}
-    """
-    keys = set(beams)
-    if {"start", "stop", "count"} <= keys <= {"start", "stop", "count"}:
-        try:
-            a, b, n = float(beams["start"]), float(beams["stop"]), beam_count(beams["count"])
-        except (TypeError, ValueError):
-            raise ConfigError("key 'beams': start, stop must be numbers and count an "
-                              "integer") from None
-        if n < 1 or not (0 <= a <= 180 and 0 <= b <= 180):
-            raise ConfigError("key 'beams': cone angles in [0, 180] deg and count >= 1")
-        cone = np.linspace(a, b, n)
-        dirs = np.zeros((n, 3))
-        dirs[:, 0] = np.cos(np.deg2rad(cone))
-        return cone, dirs, "cone"
-    if "bearings" in keys and keys <= {"bearings", "elevations"}:
-        try:
-            brg = np.asarray(beams["bearings"], float).reshape(-1)
-            elv = np.asarray(beams.get("elevations", [0.0]), float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ConfigError("key 'beams': bearings and elevations must be lists of "
-                              "numbers") from None
-        if brg.size == 0 or elv.size == 0 or np.any(np.abs(elv) > 90):
-            raise ConfigError("key 'beams': need bearings and elevations in [-90, 90] deg")
-        e, b = np.meshgrid(np.deg2rad(elv), np.deg2rad(brg), indexing="ij")
-        e, b = e.ravel(), b.ravel()
-        dirs = np.stack([np.cos(e) * np.cos(b), np.cos(e) * np.sin(b), -np.sin(e)], -1)
-        return np.stack([np.rad2deg(b), np.rad2deg(e)], -1), dirs, "3d"
-    raise ConfigError("key 'beams': expected {start, stop, count} (cone angles, deg) or "
-                      "{bearings = [...], elevations = [...]} (deg)")
 
 
 def element_advances(positions: np.ndarray, dirs: np.ndarray, mode: str,

@@ -48,6 +48,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 
 from arrayproc.dsp import fft
+from arrayproc.dsp.bands import band_slice
 
 from ._kernels import (
     SINC_HALF,
@@ -81,34 +82,6 @@ class Delays:
     tau: np.ndarray
     sigma: np.ndarray
     corr: np.ndarray
-
-
-def band_bins(nfft: int, fs: float, band: tuple[float, float] | None) -> tuple[int, int]:
-    """First and one-past-last rfft bin of ``band`` (Hz) for an ``nfft``-point transform.
-
-    Parameters
-    ----------
-    nfft : int
-        Transform length, samples.
-    fs : float
-        Sample rate, Hz.
-    band : (lo, hi) Hz or None
-        None: every bin but DC.
-
-    Returns
-    -------
-    k1, k2 : int
-        Bins ``k1 <= k < k2`` with ``lo <= k fs/nfft <= hi``.
-    """
-    nb = nfft // 2 + 1
-    if band is None:
-        return 1, nb
-    df = fs / nfft
-    k1 = max(0, int(np.ceil(band[0] / df - 1e-9)))
-    k2 = min(nb, int(np.floor(band[1] / df + 1e-9)) + 1)
-    if k2 - k1 < 2:
-        raise ValueError(f"band {band} Hz holds fewer than 2 bins at nfft={nfft}, fs={fs}")
-    return k1, k2
 
 
 class GccEstimator:
@@ -190,7 +163,7 @@ class GccEstimator:
             raise ValueError(f"circular correlation needs an even snapshot length, got {n}")
         if 2 * self.Lw + 1 > self.nfft:
             raise ValueError("lag limit too long for the snapshot (lower max_lag)")
-        self.k1, self.k2 = band_bins(self.nfft, fs, band)
+        self.k1, self.k2 = band_slice(self.nfft, fs, band)
         self.df = fs / self.nfft
         self.freqs = np.arange(self.k1, self.k2) * self.df
         self.band_width = (self.k2 - self.k1) * self.df

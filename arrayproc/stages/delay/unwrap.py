@@ -34,7 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft as sfft
 
-from .gcc import Delays, band_bins
+from arrayproc.dsp.bands import band_slice
+
+from .gcc import Delays
 
 
 def lls_delay(phase: np.ndarray, freqs: np.ndarray) -> tuple[float, float, float]:
@@ -177,7 +179,7 @@ class UnwrapEstimator:
     max_lag: float | np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        self.k1, self.k2 = band_bins(self.n, self.fs, self.band)
+        self.k1, self.k2 = band_slice(self.n, self.fs, self.band)
         self.freqs = np.arange(self.k1, self.k2) * self.fs / self.n
 
     def __call__(self, frames: np.ndarray) -> Delays:

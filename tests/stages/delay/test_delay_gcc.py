@@ -8,9 +8,10 @@ import scipy.signal as ss
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from arrayproc.dsp.bands import band_slice as band_bins
 from arrayproc.stages.delay import bounds
 from arrayproc.stages.delay._kernels import corr_at, refine_peaks, windowed_peaks
-from arrayproc.stages.delay.gcc import GccEstimator, band_bins, delay_sigma, gcc_delays
+from arrayproc.stages.delay.gcc import GccEstimator, delay_sigma, gcc_delays
 
 FS = 5120.0
 
