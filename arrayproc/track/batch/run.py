@@ -341,8 +341,9 @@ def run_tma(products_path: str, config_path: str, output_path: str,
             rng = float(np.hypot(sol.state[0] - own[0], sol.state[1] - own[1]))
             if not rng <= 2.0 * cfg["max_range_m"]:
                 warnings.warn(f"{products_path}: window [{w0:g}, {w1:g}] s: the solution lies "
-                              f"{rng:.3g} m away, beyond twice tma.max_range_m: the rows may "
-                              "mix several sources (give one source's rows, e.g. a cone_gate)",
+                              f"{rng:.3g} m away, beyond twice tma.max_range_m: the window may "
+                              "be unobservable (no ownship manoeuvre) or its rows may mix "
+                              "several sources (give one source's rows, e.g. a cone_gate)",
                               stacklevel=2)
             if progress:
                 print(f"tma {cfg['method']} [{w0:8.1f}, {w1:8.1f}] s: x {sol.state[0]:9.1f} "
