@@ -158,6 +158,17 @@ def _install_handlers() -> dict[int, object]:
     return old
 
 
+def _quiet_unraisable(hook):
+    """An unraisable-exception hook that drops a stop signal raised where Python cannot
+    propagate it (a weakref callback, a ``__del__``): the stop is already recorded and every
+    writer checks it, so printing its traceback would only break the one-line rule."""
+    def quiet(u) -> None:
+        if isinstance(u.exc_value, (Interrupted, KeyboardInterrupt)):
+            return
+        hook(u)
+    return quiet
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     text = " ".join(str(message).split())
     print(f"arrayproc: warning: {text}", file=sys.stderr)
@@ -202,6 +213,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     old = _install_handlers()
     old_show = warnings.showwarning
     warnings.showwarning = _show_warning
+    old_unraisable = sys.unraisablehook
+    sys.unraisablehook = _quiet_unraisable(old_unraisable)
     try:
         try:
             args = build_parser().parse_args(argv)
@@ -217,6 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for s, h in old.items():
             signal.signal(s, h)  # type: ignore[arg-type]
         warnings.showwarning = old_show
+        sys.unraisablehook = old_unraisable
 
 
 if __name__ == "__main__":  # pragma: no cover

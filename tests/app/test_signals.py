@@ -143,3 +143,20 @@ def test_signals_20_trials_each(inputs, tmp_path):
         problems += run_trial(inputs, tmp_path / f"w{i}", command, sig, delay)
     print(f"signal trials: {len(plan)}, clean: {len(plan) - len(problems)}")
     assert not problems, problems
+
+
+def test_a_stop_raised_where_python_cannot_propagate_it_prints_nothing():
+    """A SIGTERM landing in a weakref callback or __del__ becomes an 'unraisable' exception:
+    the stop is already recorded, so the hook drops it instead of printing a traceback; other
+    unraisable exceptions still reach the previous hook."""
+    import types
+
+    from arrayproc.app.cli import _quiet_unraisable
+    from arrayproc.errors import Interrupted
+    seen = []
+    hook = _quiet_unraisable(seen.append)
+    stop = types.SimpleNamespace(exc_value=Interrupted(15))
+    other = types.SimpleNamespace(exc_value=ValueError("x"))
+    hook(stop)
+    hook(other)
+    assert seen == [other]
