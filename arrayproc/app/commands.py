@@ -36,7 +36,8 @@ def _quiet(msg: str) -> None:
 
 
 # -- geometry ---------------------------------------------------------------------------------
-def geometry(line: Sequence[float] | None = None, geometry_file: str | None = None):
+def geometry(line: Sequence[float] | None = None, geometry_file: str | None = None,
+             z_up: bool = False):
     """Element positions from ``--line N SPACING`` or a geometry file, else None.
 
     Parameters
@@ -45,6 +46,8 @@ def geometry(line: Sequence[float] | None = None, geometry_file: str | None = No
         Uniform line array of N elements, spacing m apart.
     geometry_file : str, optional
         CSV (x, y, z columns) or acoular XML file of positions, m.
+    z_up : bool
+        The file's z axis points up (arrayproc's body frame has z down): z is negated.
 
     Returns
     -------
@@ -62,7 +65,11 @@ def geometry(line: Sequence[float] | None = None, geometry_file: str | None = No
                               f"got {spacing:g}")
         return line_array(int(n), spacing)
     if geometry_file:
-        return read_geometry(geometry_file)
+        pos = read_geometry(geometry_file)
+        if z_up:
+            pos = pos.copy()
+            pos[:, 2] = -pos[:, 2]
+        return pos
     return None
 
 
@@ -501,10 +508,13 @@ def add_geometry_options(p: argparse.ArgumentParser) -> None:
                    help="uniform line array of N elements SPACING m apart")
     g.add_argument("--geometry", metavar="FILE",
                    help="element positions: CSV with x,y,z columns or acoular XML")
+    p.add_argument("--z-up", action="store_true",
+                   help="the geometry file's z axis points up (arrayproc's points down)")
 
 
 def _geometry_of(args: argparse.Namespace):
-    return geometry(getattr(args, "line", None), getattr(args, "geometry", None))
+    return geometry(getattr(args, "line", None), getattr(args, "geometry", None),
+                    z_up=getattr(args, "z_up", False))
 
 
 def _geometry_inputs(args: argparse.Namespace) -> list[str]:

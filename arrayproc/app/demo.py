@@ -128,8 +128,10 @@ def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
         geometry = xav / "hydrophones_config_07-HI.csv"
         rec = out / "xav.h5"
         step(f"import {len(wavs)} WAV files from {xav} -> {rec}")
+        # the XAV configuration file's z axis points up: its deepest hydrophone (7.70 m in
+        # deployment_info.csv) has the lowest z
         commands.import_wavs(wavs, str(rec), positions=commands.geometry(
-            geometry_file=str(geometry)), sound_speed=1484.0, inputs=[str(geometry)])
+            geometry_file=str(geometry), z_up=True), sound_speed=1484.0, inputs=[str(geometry)])
         commands.info(str(rec), echo=echo)
         step(f"process {rec.name} with power.toml -> {out / 'xav_power.h5'}")
         commands.process(str(rec), str(DATA / "chains" / "power.toml"),

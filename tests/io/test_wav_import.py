@@ -116,3 +116,19 @@ def test_import_real_six_hydrophone_recording(tmp_path, capsys):
         _, ref = wf.read(w)
         assert np.array_equal(x[:, ch], ref[100000:100100] / 2.0**31)
     assert np.all(np.abs(x) < 1) and x.std() > 0
+
+
+@pytest.mark.skipif(not XAV.is_dir(), reason="needs ../shared/data beside the checkout")
+def test_geometry_z_up_matches_the_deployment_depths(tmp_path):
+    """The XAV configuration file's z axis points up: with --z-up the imported z (down) orders
+    the hydrophones as the deployment sheet's depths do (deepest 7.70 m has the largest z)."""
+    import csv
+
+    from arrayproc.app.commands import geometry
+    pos = geometry(geometry_file=str(XAV / "hydrophones_config_07-HI.csv"), z_up=True)
+    raw = read_geometry_csv(XAV / "hydrophones_config_07-HI.csv")
+    assert np.array_equal(pos[:, :2], raw[:, :2]) and np.array_equal(pos[:, 2], -raw[:, 2])
+    with open(XAV / "deployment_info.csv", newline="") as f:
+        depth = np.array([float(r["hydrophone_depth"]) for r in csv.DictReader(f)])
+    # depth differences equal z differences (m), channel by channel
+    assert np.allclose(pos[:, 2] - pos[3, 2], depth - depth[3], atol=0.02)
