@@ -266,3 +266,27 @@ class Table:
         if unknown:
             where = f"[{self.where}]" if self.where else "top level"
             raise ConfigError(f"{self.file}: {where}: unknown key {unknown[0]!r}")
+
+
+def resolve_beside(path: str, rel_to: str) -> str:
+    """A path named inside a file (a recording named by a products file, a products file named
+    by a configuration) as it resolves for the user.
+
+    Parameters
+    ----------
+    path : str
+        The path as written; empty, absolute or existing paths are returned unchanged.
+    rel_to : str
+        The file that names it: a relative ``path`` that does not exist from the working
+        directory is looked up beside this file.
+
+    Returns
+    -------
+    str
+        The path beside ``rel_to`` when that exists, else ``path`` unchanged (the caller's
+        open then reports it missing).
+    """
+    if not path or os.path.isabs(path) or os.path.exists(path):
+        return path
+    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
+    return cand if os.path.exists(cand) else path

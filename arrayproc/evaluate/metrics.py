@@ -32,7 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from arrayproc.config import resolve_beside
 from arrayproc.errors import ConfigError
+from arrayproc.io.text import as_text
 
 
 def _check(c: float, p: float) -> None:
@@ -247,19 +249,6 @@ def track_scores(truth: np.ndarray, detected: np.ndarray, track_time_idx: dict[i
     return TrackScores(labels, held, principal, breaks, n_det, purity, false_tracks)
 
 
-def _str(v: object) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def _near(path: str, rel_to: str) -> str:
-    """``path`` as given when it exists (or is absolute), else beside ``rel_to``."""
-    import os
-    if not path or os.path.isabs(path) or os.path.exists(path):
-        return path
-    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
-    return cand if os.path.exists(cand) else path
-
-
 def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
                          alpha: float = 2.0, cone_gate_deg: float = 5.0,
                          detect_gate_deg: float = 3.0, towship: bool = True) -> dict:
@@ -296,12 +285,12 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
     from arrayproc.io.recording import Recording
 
     prod = read_products(tracks_path)
-    groups = [g for n, g in prod.items() if n != "/" and _str(g.get("kind")) == "tracks"]
+    groups = [g for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "tracks"]
     if not groups:
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]
     root = prod["/"]
-    rec_path = _near(_str(root.get("recording", "")), tracks_path)
+    rec_path = resolve_beside(as_text(root.get("recording", "")), tracks_path)
     try:
         rec = Recording(rec_path, require_geometry=False)
     except Exception as e:  # noqa: BLE001 - any open failure is the same user error
@@ -312,8 +301,8 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
         if not srcs:
             raise FormatError(f"{rec_path}: no /truth/sources to score against")
         names = sorted(srcs)
-        meas = read_products(_near(_str(root.get("source", "")), tracks_path))
-        mgroups = {_str(m.get("kind")): m for n, m in meas.items() if n != "/"}
+        meas = read_products(resolve_beside(as_text(root.get("source", "")), tracks_path))
+        mgroups = {as_text(m.get("kind")): m for n, m in meas.items() if n != "/"}
         bearing = "cone_deg" in g
         if bearing and "bearings" in mgroups:
             mt = np.asarray(mgroups["bearings"]["time"], float)

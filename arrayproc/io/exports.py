@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from arrayproc.errors import FormatError
+from arrayproc.io.text import as_text
 
 EARTH_RADIUS_M = 6371008.8
 KNOT = 1852.0 / 3600.0
@@ -46,13 +47,9 @@ RAVEN_COLUMNS = ("Selection", "View", "Channel", "Begin Time (s)", "End Time (s)
 _EXTRA = ("snr_db", "level_db", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "spl_db")
 
 
-def _s(v: object) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
 def _recording_info(root: dict, path: str) -> tuple[str, float | None, str | None, str]:
     """(recording path, duration s or None, ISO start time or None, file name for Raven)."""
-    src = _s(root.get("source", root.get("recording", "")))
+    src = as_text(root.get("source", root.get("recording", "")))
     if not src:
         return "", None, None, os.path.basename(path)
     if not os.path.isabs(src) and not os.path.exists(src):
@@ -70,7 +67,7 @@ def _recording_info(root: dict, path: str) -> tuple[str, float | None, str | Non
         return src, None, None, name
     import h5py
     with h5py.File(src, "r") as f:
-        imp = _s(f.attrs.get("imported_from", ""))
+        imp = as_text(f.attrs.get("imported_from", ""))
     if imp and "," not in imp:
         name = imp  # the WAV a Raven user opens
     return src, dur, start, name
@@ -102,7 +99,7 @@ def raven_rows(paths: Sequence[str]) -> list[dict[str, object]]:
         for gname, g in prod.items():
             if gname == "/":
                 continue
-            kind = _s(g.get("kind"))
+            kind = as_text(g.get("kind"))
             if kind == "detections":
                 for k in ("time_start", "time_end", "freq_lo", "freq_hi"):
                     if k not in g:
@@ -262,10 +259,10 @@ def write_rep(path: str, out: str, origin: tuple[float, float] = (0.0, 0.0),
     _src, _dur, start_iso, _ = _recording_info(root, path)
     lines = [f";; arrayproc export of {os.path.basename(path)}; origin {origin[0]:.6f} "
              f"{origin[1]:.6f}"]
-    groups = {_s(g.get("kind")): g for n, g in prod.items() if n != "/"}
+    groups = {as_text(g.get("kind")): g for n, g in prod.items() if n != "/"}
     if "tracks" in groups:
         if not start_iso:
-            rec = _s(root.get("recording", ""))
+            rec = as_text(root.get("recording", ""))
             if rec and os.path.exists(rec):
                 from arrayproc.io.recording import Recording
                 with Recording(rec, require_geometry=False) as r:
@@ -278,7 +275,7 @@ def write_rep(path: str, out: str, origin: tuple[float, float] = (0.0, 0.0),
         if confirmed_only and "status" in g:
             st = np.asarray(g["status"])
             keep = (st == 1) if st.dtype.kind in "iu" else np.array(
-                [_s(s) == "confirmed" for s in st])  # io.schema code 1: confirmed
+                [as_text(s) == "confirmed" for s in st])  # io.schema code 1: confirmed
         if "own_x" in g:
             ot, idx = np.unique(t, return_index=True)
             ox = np.asarray(g["own_x"], float)[idx]

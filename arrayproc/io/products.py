@@ -19,6 +19,7 @@ from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.recording import open_h5
 from arrayproc.io.schema import check_columns, check_group
 from arrayproc.io.schema import kind as schema_kind
+from arrayproc.io.text import as_text
 
 FORMAT = "arrayproc.products"
 FORMAT_VERSION = 1
@@ -145,7 +146,7 @@ def is_products(path: str | os.PathLike) -> bool:
     """Whether the file at path is an arrayproc products file."""
     with open_h5(path) as f:
         fmt = f.attrs.get("format", "")
-        return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == FORMAT
+        return as_text(fmt) == FORMAT
 
 
 def product_kinds(path: str | os.PathLike) -> list[str]:
@@ -197,8 +198,7 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
     """
     with open_h5(path, "products file") as f:
         fmt = f.attrs.get("format", "")
-        fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
-        if fmt != FORMAT:
+        if as_text(fmt) != FORMAT:
             raise FormatError(f"{path}: not an arrayproc products file")
         out: dict[str, dict[str, Any]] = {"/": dict(f.attrs)}
         for name, g in f.items():

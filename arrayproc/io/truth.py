@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from arrayproc.io.text import as_text
+
 
 def _interp_track(t: np.ndarray, tt: np.ndarray, pos: np.ndarray) -> np.ndarray:
     return np.stack([np.interp(t, tt, pos[:, i]) for i in range(pos.shape[1])], -1)
@@ -27,7 +29,7 @@ def sources(rec, towship: bool = True) -> dict[str, dict]:
         if name == "attrs" or not isinstance(s, dict):
             continue
         kind = s.get("attrs", {}).get("kind", "source")
-        kind = kind.decode() if isinstance(kind, bytes) else str(kind)
+        kind = as_text(kind)
         if kind not in ("source", "towship") or (kind == "towship" and not towship):
             continue
         out[name] = s

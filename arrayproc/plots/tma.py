@@ -16,23 +16,11 @@ from typing import Any
 import h5py
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.patches import Ellipse
 
 from arrayproc.errors import FormatError
+from arrayproc.io.text import as_text
 from arrayproc.plots import register_plot
-
-
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def _ellipse(ax, mean: np.ndarray, cov: np.ndarray, nsig: float = 2.0, **kw: Any) -> None:
-    """nsig-sigma ellipse of a 2×2 covariance (m²) around mean (m), drawn in km."""
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    w = np.clip(w, 0.0, None)
-    ang = np.degrees(np.arctan2(v[1, 1], v[0, 1]))
-    ax.add_patch(Ellipse(mean / 1e3, 2 * nsig * np.sqrt(w[1]) / 1e3,
-                         2 * nsig * np.sqrt(w[0]) / 1e3, angle=ang, fill=False, **kw))
+from arrayproc.plots.ellipse import cov_ellipse
 
 
 def _truth(path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -70,15 +58,15 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
     from arrayproc.track.batch.td_tma import delay_model
 
     prod = read_products(path)
-    names = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "tma"]
+    names = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "tma"]
     if not names:
         raise FormatError(f"{path}: no tma group")
     g = prod[names[0]]
     a = g["attrs"]
-    method = _s(a.get("method", ""))
-    rec_path = _s(a.get("recording", prod["/"].get("source", "")))
-    src_path = _s(a.get("products", ""))
-    sides = _s(a.get("side", "")).split(",")
+    method = as_text(a.get("method", ""))
+    rec_path = as_text(a.get("recording", prod["/"].get("source", "")))
+    src_path = as_text(a.get("products", ""))
+    sides = as_text(a.get("side", "")).split(",")
     n = g["x"].shape[0]
     fig, (ax, axm) = plt.subplots(1, 2, figsize=(12, 6))
     t_all = np.concatenate([np.linspace(g["t0"][i], g["t1"][i], 50) for i in range(n)])
@@ -102,7 +90,7 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
             ax.plot(st[0] / 1e3, st[1] / 1e3, "r.")
             c = g["crlb"][i]
             if np.all(np.isfinite(c[:2, :2])):
-                _ellipse(ax, st[:2], c[:2, :2], edgecolor="r",
+                cov_ellipse(ax, st[:2], c[:2, :2], edgecolor="r",
                          label="2σ CRLB at t0" if i == 0 else None)
         ax.set_xlabel("x east (km)")
         ax.set_ylabel("y north (km)")
@@ -114,7 +102,7 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
         meas = None
         if src_path and os.path.exists(src_path) and rec is not None:
             meas = read_measurements(src_path, {
-                "method": method, "group": _s(a.get("measurements", "")), "cone_gate": None})
+                "method": method, "group": as_text(a.get("measurements", "")), "cone_gate": None})
         if meas is None:
             axm.text(0.5, 0.5, "measurements unavailable\n(products or recording missing)",
                      ha="center", transform=axm.transAxes)

@@ -12,22 +12,14 @@ from typing import Any
 import h5py
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.patches import Ellipse
 
 from arrayproc.errors import FormatError
+from arrayproc.io.text import as_text
 from arrayproc.plots import register_plot
+from arrayproc.plots.ellipse import cov_ellipse
 
 FILTER_STYLE = {"ekf": "tab:red", "ukf": "tab:blue", "ckf": "tab:green", "ghf": "tab:orange",
                 "srf": "tab:purple", "rpf": "tab:brown"}
-
-
-def _ellipse(ax, mean: np.ndarray, cov: np.ndarray, nsig: float = 2.0, **kw: Any) -> None:
-    """Draw the nsig-sigma ellipse of a 2×2 covariance (m²) around mean (m), in km."""
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    w = np.clip(w, 0.0, None)
-    ang = np.degrees(np.arctan2(v[1, 1], v[0, 1]))
-    ax.add_patch(Ellipse(mean / 1e3, 2 * nsig * np.sqrt(w[1]) / 1e3,
-                         2 * nsig * np.sqrt(w[0]) / 1e3, angle=ang, fill=False, **kw))
 
 
 def _read_truth(recording: str) -> dict[str, np.ndarray]:
@@ -90,7 +82,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
                 label=f"truth {name}")
         ax.annotate(name, (p[-1, 0] / 1e3, p[-1, 1] / 1e3), color=c, fontsize=9,
                     xytext=(4, -10), textcoords="offset points", fontstyle="italic")
-    multi = _s(dict(g.get("attrs") or {}).get("mode", "")) == "multi"
+    multi = as_text(dict(g.get("attrs") or {}).get("mode", "")) == "multi"
     from arrayproc.track.manage.tracks import status_names
     status = status_names(g["status"]) if "status" in g else None
     ids = np.unique(g["track_id"])
@@ -114,7 +106,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
         ax.plot(x / 1e3, y / 1e3, ".-", color=c, ms=2.5, lw=1.2, label=f"track {tid}")
         every = int(ellipse_every) if ellipse_every else max(1, x.size // 6)
         for i in range(every // 2, x.size, max(1, every)):
-            _ellipse(ax, np.array([x[i], y[i]]), cov[i, :2, :2], ec=c, lw=0.8, alpha=0.7)
+            cov_ellipse(ax, np.array([x[i], y[i]]), cov[i, :2, :2], ec=c, lw=0.8, alpha=0.7)
         ax.annotate(str(tid), (x[-1] / 1e3, y[-1] / 1e3), color=c, fontsize=10,
                     fontweight="bold", xytext=(4, 4), textcoords="offset points")
     ax.set_xlabel("x east (km)")
@@ -126,10 +118,6 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     fig.tight_layout()
     fig.savefig(out_png, dpi=120)
     plt.close(fig)
-
-
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def _read_truth_timed(recording: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:

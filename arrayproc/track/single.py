@@ -55,10 +55,11 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import read_toml
+from arrayproc.config import read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.angles import wrap_pi
 from arrayproc.geo.nav import Nav
+from arrayproc.io.text import as_text
 from arrayproc.track.filters import FILTERS, FilterDivergence, make_filter
 from arrayproc.track.init import TrackPrior, initial_state
 from arrayproc.track.manage.lr import LRResolver
@@ -134,7 +135,7 @@ def load_single_config(path: str) -> dict[str, Any]:
 def _read_bearings(prod: dict, name: str | None, products_path: str,
                    cone_gate: list[float] | None = None,
                    level: str | None = None) -> dict[str, np.ndarray]:
-    groups = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == "bearings"]
+    groups = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "bearings"]
     if name is not None:
         if name not in prod or name == "/":
             raise FormatError(f"{products_path}: no group {name!r}")
@@ -183,17 +184,6 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
     first[1:] = t[idx][1:] != t[idx][:-1]
     idx = idx[first]
     return {k: v[idx] for k, v in cols.items()}
-
-
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def _resolve(path: str, rel_to: str) -> str:
-    if os.path.isabs(path) or os.path.exists(path):
-        return path
-    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
-    return cand if os.path.exists(cand) else path
 
 
 def _read_nav(path: str) -> Nav:
@@ -368,11 +358,11 @@ def run_single(products_path: str, config_path: str, out_path: str,
     prod = read_products(products_path)
     b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"),
                        cfg.get("level"))
-    src = cfg.get("nav") or _s(prod["/"].get("source", ""))
+    src = cfg.get("nav") or as_text(prod["/"].get("source", ""))
     if not src:
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
                           "set tracker.nav")
-    rec = _resolve(src, config_path if cfg.get("nav") else products_path)
+    rec = resolve_beside(src, config_path if cfg.get("nav") else products_path)
     t = b["time"]
     own, hd = ownship_states(_read_nav(rec), t)
     port = np.deg2rad(b["bearing_port_deg"])
