@@ -39,7 +39,7 @@ class Scatterer:
 
 class PingTrain:
     """The projector's emitted signal (Pa at 1 m) by absolute source-sample index: the direct
-    blast is propagated like any passive source."""
+    blast is propagated like any passive source (each ping with its own waveform and level)."""
 
     def __init__(self, active: ActiveSim) -> None:
         self.a = active
@@ -50,13 +50,14 @@ class PingTrain:
         a = self.a
         t = np.arange(m0, m1) / a.fs_src
         out = np.zeros(t.size)
-        T = a.spec.waveform.duration
-        for tp in a.ping_times:
+        for tp, name in zip(a.ping_times, a.ping_names):
+            w = a.spec.waveforms[name]
+            T = w.duration
             if tp + T < t[0] or tp > t[-1]:
                 continue
             i0 = max(0, int(np.floor((tp - t[0]) * a.fs_src)))
             i1 = min(t.size, int(np.ceil((tp + T - t[0]) * a.fs_src)) + 1)
-            out[i0:i1] += a.amp * a.spec.waveform(t[i0:i1] - tp)
+            out[i0:i1] += a.amps[name] * w(t[i0:i1] - tp)
         return out
 
 
@@ -73,11 +74,14 @@ class ActiveSim:
         self.fs = float(fs)
         self.fs_src = float(fs_src)
         self.projector = BodyOffsetMover(own, spec.offset)
-        self.amp = tonal_amplitude(spec.level_db)
-        n = spec.count if spec.count is not None else int(
-            np.floor((duration - spec.first) / spec.interval)) + 1
-        times = spec.first + spec.interval * np.arange(max(n, 0))
-        self.ping_times = times[times < duration]
+        #: peak amplitude at 1 m of each waveform, from its source level
+        self.amps = {n: tonal_amplitude(lv) for n, lv in spec.levels.items()}
+        self.amp = self.amps[spec.schedule[0]]
+        self.ping_times, self.ping_names = spec.pings(duration)
+        #: waveform names in /active/waveforms order (sorted) and each ping's index into them
+        self.names = sorted(spec.waveforms)
+        self.ping_index = np.array([self.names.index(n) for n in self.ping_names], np.int64)
+        self.ping_duration = np.array([spec.waveforms[n].duration for n in self.ping_names])
         # scatterers
         self.scatterers: list[Scatterer] = []
         for tg in spec.targets:
@@ -96,23 +100,24 @@ class ActiveSim:
                 self.scatterers.append(Scatterer(
                     f"clutter{i}", "clutter", FixedMover([xy[i, 0], xy[i, 1], cl.depth]),
                     cl.depth, float(ts[i])))
-        # pulse buffer with K+2 zero samples of margin each side
+        # pulse buffers with K+2 zero samples of margin each side, one per waveform
         pad = HALF_WIDTH + 2
         self.sig_t0 = -pad / self.fs_src
-        self.sig = np.ascontiguousarray(spec.waveform(
-            self.sig_t0 + np.arange(int(np.ceil(spec.waveform.duration * self.fs_src))
-                                    + 2 * pad + 1) / self.fs_src))
+        self.sigs = {n: np.ascontiguousarray(w(
+            self.sig_t0 + np.arange(int(np.ceil(w.duration * self.fs_src)) + 2 * pad + 1)
+            / self.fs_src)) for n, w in spec.waveforms.items()}
+        self.sig = self.sigs[spec.schedule[0]]
         self.table = default_table()
         self._windows(array_extent)
 
     def _windows(self, extent: float) -> None:
         """Arrival windows at the array and the truth of every (ping, scatterer) echo."""
-        T = self.spec.waveform.duration
+        T = self.ping_duration
         c = self.c
         rows = {k: [] for k in ("ping", "target", "time", "delay_s", "range_rate_mps",
                                 "level_db", "range_m", "t_start", "t_end")}
         tp = self.ping_times
-        if tp.size == 0:
+        if tp.size == 0 or not self.scatterers:
             self.windows = {k: np.zeros(0) for k in rows}
             return
         pad = extent / c + (HALF_WIDTH + 3) / self.fs_src + 2.0 / self.fs
@@ -134,7 +139,8 @@ class ActiveSim:
             rr = 0.5 * (np.sum(r1v / r1[:, None] * (tv - pv), axis=1)
                         + np.sum(r2v / r2[:, None] * (tv - rv), axis=1))
             depth_r = float(self.own.depth)
-            level = (self.spec.level_db + sc.ts_db
+            sl = np.array([self.spec.levels[n] for n in self.ping_names])
+            level = (sl + sc.ts_db
                      - self.loss.tl_db(r1, sc.depth, depth_r) - self.loss.tl_db(r2, sc.depth,
                                                                                 depth_r))
             rows["ping"].append(np.arange(tp.size))
@@ -151,11 +157,16 @@ class ActiveSim:
         self.windows = {k: v[order] for k, v in self.windows.items()}
 
     def truth(self) -> dict:
-        """``/truth/pings`` and ``/truth/echoes`` (DESIGN section 3) plus scatterer data."""
+        """``/truth/pings`` (time, waveform name, source level) and ``/truth/echoes`` (DESIGN
+        section 3) plus scatterer data; attrs: the first scheduled waveform's parameters (the
+        only one's in the single-waveform form), the schedule and the projector offset."""
         w = self.windows
         wf = self.spec.waveform
         return {
-            "pings": {"time": self.ping_times.astype(float)},
+            "pings": {"time": self.ping_times.astype(float),
+                      "waveform": np.array(self.ping_names, dtype="S"),
+                      "level_db": np.array([self.spec.levels[n] for n in self.ping_names],
+                                           float)},
             "echoes": {"ping": w["ping"].astype(np.int64), "target": w["target"].astype(np.int64),
                        "time": w["time"], "delay_s": w["delay_s"],
                        "range_rate_mps": w["range_rate_mps"], "level_db": w["level_db"],
@@ -168,26 +179,32 @@ class ActiveSim:
                                                   for s in self.scatterers]).reshape(-1, 3)},
         }, {"waveform": wf.kind, "duration": wf.duration, "fc": wf.fc, "f0": wf.f0,
             "f1": wf.f1, "bits": int(wf.sequence.size), "taper": wf.taper,
-            "level_db": self.spec.level_db, "offset": self.spec.offset}
+            "level_db": self.spec.levels[self.spec.schedule[0]], "offset": self.spec.offset,
+            "schedule": ",".join(self.spec.schedule)}
 
     def recording_active(self) -> tuple:
         """Arguments of :meth:`arrayproc.io.recording.RecordingWriter.set_active`: the ping
-        schedule and the replica as a real sonar recording carries them (DESIGN section 4),
-        the replica sampled at the recording's rate (unit peak, the transmitted taper)."""
-        wf = self.spec.waveform
-        if wf.kind == "hfm":
-            fc, bw = 0.5 * (wf.f0 + wf.f1), abs(wf.f1 - wf.f0)
-        else:
-            fc, bw = wf.fc, wf.bandwidth
-        attrs = {"kind": wf.kind, "fc": float(fc), "bandwidth": float(bw),
-                 "duration": float(wf.duration), "taper": float(wf.taper)}
-        if wf.kind == "bpsk":
-            attrs["bits"] = int(wf.sequence.size)
-        if wf.kind == "hfm":
-            attrs.update(f0=float(wf.f0), f1=float(wf.f1))
-        rep = wf(np.arange(int(np.ceil(wf.duration * self.fs)) + 1) / self.fs)
-        return (self.ping_times.astype(float), np.zeros(self.ping_times.size, np.int64),
-                {wf.kind: (rep, attrs)}, np.asarray(self.spec.offset, float))
+        schedule and every replica as a real sonar recording carries them (DESIGN section 4),
+        each replica sampled at the recording's rate (unit peak, the transmitted taper) and
+        stored under its scenario name; each ping's index into the sorted names."""
+        reps = {}
+        for name in self.names:
+            wf = self.spec.waveforms[name]
+            if wf.kind == "hfm":
+                fc, bw = 0.5 * (wf.f0 + wf.f1), abs(wf.f1 - wf.f0)
+            else:
+                fc, bw = wf.fc, wf.bandwidth
+            attrs = {"kind": wf.kind, "fc": float(fc), "bandwidth": float(bw),
+                     "duration": float(wf.duration), "taper": float(wf.taper),
+                     "level_db": float(self.spec.levels[name])}
+            if wf.kind == "bpsk":
+                attrs["bits"] = int(wf.sequence.size)
+            if wf.kind == "hfm":
+                attrs.update(f0=float(wf.f0), f1=float(wf.f1))
+            reps[name] = (wf(np.arange(int(np.ceil(wf.duration * self.fs)) + 1) / self.fs),
+                          attrs)
+        return (self.ping_times.astype(float), self.ping_index.copy(), reps,
+                np.asarray(self.spec.offset, float))
 
     def render(self, out: np.ndarray, k0: int, t: np.ndarray, pose: PoseTrack,
                body: np.ndarray) -> None:
@@ -204,7 +221,9 @@ class ActiveSim:
             if i1 <= i0:
                 continue
             sc = self.scatterers[int(w["target"][i])]
-            tp = float(self.ping_times[int(w["ping"][i])])
+            k = int(w["ping"][i])
+            tp = float(self.ping_times[k])
+            name = self.ping_names[k]
             tw = t[i0:i1]
             # expansion points on the absolute grid (exact there), interpolated
             tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
@@ -217,7 +236,7 @@ class ActiveSim:
             mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
             echo_accumulate(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw,
                             pose.rpos[i0:i1], pose.rdepth[i0:i1], pose.sin_h[i0:i1],
-                            pose.cos_h[i0:i1], pose.lateral[i0:i1], body, self.c, self.sig, tp,
-                            self.sig_t0, self.fs_src, self.table, mode, r_t, gtab, g0, gdr,
-                            self.amp * 10 ** (sc.ts_db / 20.0), sc.alpha,
-                            self.spec.waveform.duration)
+                            pose.cos_h[i0:i1], pose.lateral[i0:i1], body, self.c,
+                            self.sigs[name], tp, self.sig_t0, self.fs_src, self.table, mode,
+                            r_t, gtab, g0, gdr, self.amps[name] * 10 ** (sc.ts_db / 20.0),
+                            sc.alpha, self.spec.waveforms[name].duration)

@@ -139,15 +139,54 @@ class ClutterSpec:
 
 @dataclass
 class ActiveSpec:
-    waveform: Any  # arrayproc.acoustics.waveforms.Waveform
+    """The ``[active]`` section: named waveforms, the ping schedule, targets and clutter.
+
+    Ping k is transmitted at ``times[k]`` when explicit times are given, else at
+    ``first + k·interval``; its waveform is ``schedule[k mod len(schedule)]``. The
+    single-waveform form (``waveform = "bpsk"`` …) is one waveform named after its kind.
+    """
+
+    waveforms: dict[str, Any]  # name -> arrayproc.acoustics.waveforms.Waveform
+    levels: dict[str, float]  # name -> source level, dB re 1 µPa @ 1 m
+    schedule: list[str]  # waveform names, cycled over the pings
     level_db: float
-    interval: float
+    interval: float | None
     first: float
     count: int | None
     offset: np.ndarray
     direct: bool
     targets: list[TargetSpec]
     clutter: ClutterSpec | None
+    times: np.ndarray | None = None  # explicit transmission times, s
+
+    @property
+    def waveform(self) -> Any:
+        """The first scheduled waveform (the only one in the single-waveform form)."""
+        return self.waveforms[self.schedule[0]]
+
+    def pings(self, duration: float) -> tuple[np.ndarray, list[str]]:
+        """Transmission times (s) inside [0, ``duration``) and each ping's waveform name.
+
+        Parameters
+        ----------
+        duration : float
+            Recording length, s.
+
+        Returns
+        -------
+        times : (n,) ndarray
+            Increasing transmission start times, s.
+        names : list of str
+            Waveform name of each ping.
+        """
+        if self.times is not None:
+            t = np.asarray(self.times, float)
+        else:
+            n = self.count if self.count is not None else int(
+                np.floor((duration - self.first) / self.interval)) + 1
+            t = self.first + self.interval * np.arange(max(n, 0))
+        t = t[t < duration]
+        return t, [self.schedule[k % len(self.schedule)] for k in range(t.size)]
 
 
 @dataclass
@@ -363,7 +402,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                     nav_interval, array, own, own_static, sources, prop, noise, active)
 
 
-def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
+def _waveform(t: _Table, fs: float, file: str) -> Any:
+    """One waveform from ``waveform`` (kind), ``duration``, ``taper`` and the kind's keys."""
     from arrayproc.acoustics import waveforms as wf
 
     kind = t.str_("waveform", required=True, choices=("bpsk", "hfm", "cw"))
@@ -383,8 +423,93 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
     if w.band[1] > PASSBAND * fs:
         raise t.err("waveform", f"band up to {w.band[1]:g} Hz is above the simulator's band "
                     f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-    level = t.num("level_db", required=True)
-    interval = t.num("interval", required=True, positive=True)
+    return w
+
+
+def _plain_name(t: _Table, key: str, name: str, what: str) -> None:
+    if not name or "/" in name or name in (".", ".."):
+        raise t.err(key, f"{name!r} must be a plain name (not empty, no '/', not '.' or "
+                    f"'..'): it names {what}")
+
+
+def _schedule(t: _Table, fs: float, file: str, level: float
+              ) -> tuple[dict[str, Any], dict[str, float], list[str], np.ndarray | None]:
+    """Waveforms, their levels, the schedule and explicit times of the ``[active]`` table.
+
+    Single-waveform form: ``waveform = "<kind>"`` and its keys in ``[active]`` (the replica is
+    named after the kind). Several waveforms: ``[active.waveforms.<name>]`` tables with the
+    same keys (plus an optional ``level_db``) and ``schedule = [names…]`` cycled over the pings.
+    """
+    if t.has("waveforms"):
+        for k in ("waveform", "duration", "taper", "fc", "bits", "f0", "f1"):
+            if t.has(k):
+                raise t.err(k, "give the waveform in [active] (one waveform) or in "
+                            "[active.waveforms.<name>] tables, not both")
+        raw = t.raw("waveforms")
+        if not isinstance(raw, dict) or not raw:
+            raise t.err("waveforms", "must hold one or more [active.waveforms.<name>] tables")
+        waves, levels = {}, {}
+        for name, sub in raw.items():
+            wt = _Table(sub, f"{t.where}.waveforms.{name}", file)
+            _plain_name(t, "waveforms", name, "the replica /active/waveforms/<name>")
+            waves[name] = _waveform(wt, fs, file)
+            levels[name] = _level(wt, "level_db", level)
+            wt.done()
+        if t.has("schedule"):
+            sched = t.raw("schedule")
+            if (not isinstance(sched, list) or not sched
+                    or not all(isinstance(x, str) for x in sched)):
+                raise t.err("schedule", f"must be a non-empty list of waveform names, got "
+                            f"{sched!r}")
+            bad = [x for x in sched if x not in waves]
+            if bad:
+                raise t.err("schedule", f"{bad[0]!r} is not a waveform (declared: "
+                            f"{', '.join(sorted(waves))})")
+        elif len(waves) == 1:
+            sched = list(waves)
+        else:
+            raise t.err("schedule", "missing: list the waveform names in transmission order, "
+                        f"e.g. schedule = {sorted(waves)!r}")
+    else:
+        if t.has("schedule"):
+            raise t.err("schedule", "needs [active.waveforms.<name>] tables (the single "
+                        "waveform of [active] is every ping's)")
+        w = _waveform(t, fs, file)
+        waves, levels, sched = {w.kind: w}, {w.kind: level}, [w.kind]
+    times = None
+    if t.has("times"):
+        for k in ("interval", "first", "count"):
+            if t.has(k):
+                raise t.err(k, "not used with explicit times (give times or "
+                            "interval/first/count, not both)")
+        times = t.vec("times")
+        if times.size == 0 or np.any(times < 0) or np.any(np.diff(times) <= 0):
+            raise t.err("times", "must be a non-empty increasing list of times >= 0 s")
+    return waves, levels, list(sched), times
+
+
+def _check_overlap(t: _Table, spec: ActiveSpec) -> None:
+    """A ping ends before the next one starts (several waveforms or explicit times)."""
+    if spec.times is not None:
+        t_next = np.diff(spec.times)
+        k = np.arange(t_next.size)
+    else:
+        t_next = np.full(len(spec.schedule), spec.interval)
+        k = np.arange(t_next.size)
+    dur = np.array([spec.waveforms[spec.schedule[i % len(spec.schedule)]].duration for i in k])
+    bad = np.flatnonzero(t_next < dur)
+    if bad.size:
+        i = int(bad[0])
+        key = "times" if spec.times is not None else "interval"
+        raise t.err(key, f"ping {i} ({spec.schedule[i % len(spec.schedule)]}, "
+                    f"{dur[i]:g} s) lasts past the next ping ({t_next[i]:g} s later)")
+
+
+def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
+    level = _level(t, "level_db", required=True)
+    several = t.has("waveforms") or t.has("times")
+    waves, levels, sched, times = _schedule(t, fs, file, level)
+    interval = t.num("interval", required=times is None, positive=True)
     first = t.num("first", 0.0, nonneg=True)
     count = t.int_("count", None, minimum=1)
     offset = t.vec("offset", 3, default=[0.0, 0.0, 0.0])
@@ -393,9 +518,7 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
     by_name = {s.name: s for s in sources}
     for i, tt in enumerate(t.subs("target")):
         name = tt.str_("name", f"target{i}")
-        if not name or "/" in name or name in (".", ".."):
-            raise tt.err("name", f"{name!r} must be a plain name (not empty, no '/', not '.' "
-                         "or '..')")
+        _plain_name(tt, "name", name, "the target's truth rows")
         src = tt.str_("source", None)
         if src is not None:
             if src not in by_name:
@@ -421,4 +544,8 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
                               ct.num("ts_std_db", 5.0, nonneg=True))
         ct.done()
     t.done()
-    return ActiveSpec(w, level, interval, first, count, offset, direct, targets, clutter)
+    spec = ActiveSpec(waves, levels, sched, level, interval, first, count, offset, direct,
+                      targets, clutter, times)
+    if several:
+        _check_overlap(t, spec)
+    return spec
