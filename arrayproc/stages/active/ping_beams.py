@@ -11,6 +11,16 @@ baseband's lowest frequency f0; ``extra``: ``plan``, the
 :class:`arrayproc.stages.active.bank.BandPlan`, and ``n_lags``, lags 0 ... n_lags-1 being
 complete echoes inside the window). Input blocks are consumed, not
 passed on; memory holds one window of hydrophone samples and the beams of one ping.
+
+Direct blast (``blank_direct = true``): the projector's own pulse reaches element n at
+t_p + |p − r_n|/c (p the projector's body-frame position from ``/active``, r_n the element's)
+and lasts the pulse length T; its matched-filter response, a sidelobe plateau −10 log10 N
+below a peak some 100 dB above the echoes (thesis eq. (4.5)), covers lags up to T, i.e. ranges
+up to about cT/2. Blanking sets each element's samples in
+[t_p + |p − r_n|/c − m, t_p + |p − r_n|/c + T + m] (m = ``blank_margin_s``) to zero before
+beamforming, as a receiver gated off during transmission: the plateau goes, and an echo from
+bistatic delay τ < T keeps the part of it received after the gate (SNR loss about
+10 log10(τ/T) for τ < T, none beyond).
 """
 
 from __future__ import annotations
@@ -45,12 +55,19 @@ class ActiveBeams(Stage):
                       "waveform's main lobe widened by the Doppler of +-15 m/s)"),
         "shading": Param("str", "hann", "array shading", choices=("none", "hann", "hamming")),
         "threads": Param("int", 0, "FFT and beamforming threads (0: all cores)"),
+        "blank_direct": Param("bool", False, "zero each element's samples during the direct "
+                              "arrival of the ping (projector offset from /active)"),
+        "blank_margin_s": Param("float", 0.02, "extra time blanked before and after the "
+                                "direct arrival, s"),
     }
 
     def validate(self) -> None:
         w = f"stage {self.name!r}"
         if self.window_s < 0:
             raise ConfigError(f"{w}: key 'window_s' must be >= 0 s, got {self.window_s}")
+        if self.blank_margin_s < 0:
+            raise ConfigError(f"{w}: key 'blank_margin_s' must be >= 0 s, got "
+                              f"{self.blank_margin_s}")
         try:
             self.beam_axis, self._dirs, self.beam_mode = beam_axis(self.beams)
         except ConfigError as e:
@@ -121,6 +138,9 @@ class ActiveBeams(Stage):
         if bnd > a:
             x[a - s0:bnd - s0] = buf[a - buf_start:bnd - buf_start]
         name = act.waveform[i]
+        if self.blank_direct:
+            blank_direct(x, s0 / fs - float(act.time[i]), positions, act.projector,
+                         act.waveforms[name].duration, fs, c, self.blank_margin_s)
         plan = band_plan(fs, n, plans[name])
         key = (positions.tobytes(), c)
         if key != self._tau_key:
@@ -136,3 +156,56 @@ class ActiveBeams(Stage):
                         {"plan": plan, "n_lags": n_lags, "beam_mode": self.beam_mode})
         return Block(y.T, Domain.BEAM_TIME, tp, n / fs, plan.fs_bb, positions, pose=pose,
                      beams=self.beam_axis, index=i, meta=meta)
+
+
+def direct_gate(positions: np.ndarray, projector: np.ndarray, duration: float, fs: float,
+                c: float, margin: float, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of a receive window holding the direct arrival at each element.
+
+    Parameters
+    ----------
+    positions : (C, 3) ndarray
+        Element positions, body frame, m.
+    projector : (3,) ndarray
+        Projector position, same frame, m.
+    duration : float
+        Pulse length T, s.
+    fs : float
+        Sample rate, Hz.
+    c : float
+        Sound speed, m/s.
+    margin : float
+        Time added before and after, s.
+    t0 : float
+        Time of row 0 after the transmission, s.
+
+    Returns
+    -------
+    first, stop : (C,) int ndarrays
+        Rows ``first`` (inclusive) to ``stop`` (exclusive) covering
+        [|p − r_n|/c − margin, |p − r_n|/c + T + margin] after the transmission, rounded
+        outwards.
+    """
+    d = np.linalg.norm(np.asarray(positions, float) - np.asarray(projector, float), axis=1) / c
+    first = np.floor((d - margin - t0) * fs).astype(np.int64)
+    stop = np.ceil((d + duration + margin - t0) * fs).astype(np.int64) + 1
+    return first, stop
+
+
+def blank_direct(x: np.ndarray, t0: float, positions: np.ndarray, projector: np.ndarray,
+                 duration: float, fs: float, c: float, margin: float) -> None:
+    """Zero, in place, each element's samples of the direct arrival (see :func:`direct_gate`).
+
+    Parameters
+    ----------
+    x : (n, C) ndarray
+        Receive window, row 0 at ``t0`` s after the transmission.
+    t0, positions, projector, duration, fs, c, margin
+        As :func:`direct_gate`.
+    """
+    first, stop = direct_gate(positions, projector, duration, fs, c, margin, t0)
+    n = x.shape[0]
+    for ch in range(x.shape[1]):
+        a, b = max(0, int(first[ch])), min(n, int(stop[ch]))
+        if b > a:
+            x[a:b, ch] = 0.0
