@@ -2,8 +2,9 @@
 
 ``[tracker] mode = "single"`` (the default; the papers' reproductions) runs the single-target
 bearings tracker of :mod:`arrayproc.track.single`; ``mode = "multi"`` runs the track manager
-over every contact (:mod:`arrayproc.track.multi`). This module only dispatches, so neither
-runner imports the other's entry point (no import cycle).
+over every contact (:mod:`arrayproc.track.multi`), or with ``measurements = "delays"`` the
+recursive TDOA position tracker (:mod:`arrayproc.track.delays`). This module only
+dispatches, so neither runner imports the other's entry point (no import cycle).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from arrayproc.errors import ConfigError
+from arrayproc.track.delays import is_delays_config, load_delays_config, run_delays
 from arrayproc.track.multi import run_multi, split_config, tracker_mode
 from arrayproc.track.single import (  # noqa: F401  (re-exported for callers of the runner)
     _read_bearings,
@@ -42,6 +44,8 @@ def load_tracker_config(path: str) -> dict[str, Any]:
         Naming the file and the key.
     """
     mode = tracker_mode(path)
+    if mode == "multi" and is_delays_config(path):  # the TDOA tracker (track/delays.py)
+        return load_delays_config(path)
     if mode == "multi":  # the multi-target keys, then the TMA filter's
         multi, tma = split_config(path)
         return {**tma, "mode": "multi", "multi": multi}
@@ -68,6 +72,9 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
     None
     """
     mode = tracker_mode(config_path)
+    if mode == "multi" and is_delays_config(config_path):  # delays rows (track/delays.py)
+        run_delays(products_path, config_path, out_path, progress=progress)
+        return
     if mode == "multi":  # every target (arrayproc.track.multi)
         run_multi(products_path, config_path, out_path, progress=progress)
         return
