@@ -46,6 +46,7 @@ Config (``[tracker]`` keys beside those of single mode)::
     q = 0.01                      # m²/s³
     sigma_speed_mps = 5.0         # unobserved tangential speed at initiation
     mirror = true
+    initiate_moving = false       # start tracks only from contacts flagged moving
     [tracker.positions]
     q = 0.01
     sigma_speed_mps = 5.0
@@ -60,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import read_toml
+from arrayproc.config import read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.track.manage.delete import DeletionRule
@@ -82,7 +83,7 @@ _SUB = {
                 "q_bearing": 0.002, "turn_ref_deg_s": 0.1, "merge_deg": 4.0,
                 "sigma_rate_deg_s": 0.5, "merge_d2": 4.0, "min_sigma_sin": 0.2},
     "contacts": {"sigma_bearing_deg": 2.0, "sigma_range_m": 20.0, "sigma_range_rate_mps": 0.3,
-                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True},
+                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True, "initiate_moving": False},
     "positions": {"q": 0.01, "sigma_speed_mps": 5.0},
 }
 
@@ -387,35 +388,87 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
 
 # ----------------------------------------------------------------------------- contacts
 
-def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool
+def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool, sound_speed: float = 1500.0
                   ) -> list[tuple[float, np.ndarray, np.ndarray, np.ndarray]]:
-    """Scans of contacts (one per distinct time): Z (m, 3) [bearing rad, range m, range rate
-    m/s], products rows (m,), and the ownship state (4,). With ``mirror`` a contact whose port
-    and starboard bearings differ enters twice."""
+    """Scans of contacts: Z (m, 3) [bearing rad, range m, range rate m/s], products rows (m,),
+    and the ownship state (4,). With ``mirror`` a contact whose port and starboard bearings
+    differ enters twice.
+
+    Without a ``ping`` column, one scan per distinct ``time``. With one (the active chain's
+    contacts, whose ``time`` is each echo's reception time t_rx, spread over the ping's
+    receive window), one scan per ping at the transmission time t_tx, estimated as the median
+    of t_rx − 2r/c over the ping's contacts (exact up to the bistatic offset, |p|/c). An echo
+    describes the geometry at its scattering time t_sc = t_rx − r/c; its range is carried
+    back to the scan time along its own range rate, r − ṙ (t_sc − t_tx) (first order; the
+    bearing changes by at most the relative tangential speed over c, 0.1° at 3 m/s, and is
+    left as measured). The ownship state is taken at t_tx.
+
+    Parameters
+    ----------
+    c : dict of ndarray
+        Columns ``time``, ``range_m``, ``bearing_port_deg``, ``bearing_stbd_deg``,
+        ``range_rate_mps`` and optionally ``ping``.
+    nav : Nav
+        The array's navigation.
+    mirror : bool
+        Enter both candidate bearings of a line array's contact.
+    sound_speed : float
+        c (m/s) for the travel times of ping-grouped contacts.
+
+    Returns
+    -------
+    list of (t, Z, rows, own)
+        Scan time (s), measurements (m, 3), products row of each measurement (m,), ownship
+        state [x, y, ẋ, ẏ] at t.
+    """
     from arrayproc.track.single import ownship_states
 
     t = c["time"]
+    by_ping = "ping" in c
+    key = c["ping"] if by_ping else t
     out = []
-    order = np.argsort(t, kind="stable")
-    cuts = np.flatnonzero(np.diff(t[order]) != 0) + 1
+    order = np.argsort(key, kind="stable")
+    cuts = np.flatnonzero(np.diff(key[order]) != 0) + 1
     for seg in np.split(order, cuts):
         if seg.size == 0:
             continue
-        own, _ = ownship_states(nav, np.array([t[seg[0]]]))
+        rng = np.asarray(c["range_m"][seg], float).copy()
+        rdot = c["range_rate_mps"][seg]
+        if by_ping:
+            ts = float(np.median(t[seg] - 2.0 * rng / sound_speed))
+            rng -= rdot * (t[seg] - rng / sound_speed - ts)
+        else:
+            ts = float(t[seg[0]])
+        own, _ = ownship_states(nav, np.array([ts]))
         zs, rows = [], []
-        for i in seg:
+        for k, i in enumerate(seg):
             bp, bs = c["bearing_port_deg"][i], c["bearing_stbd_deg"][i]
             sides = [bs] if (not mirror or abs(((bp - bs + 180) % 360) - 180) < 1e-6) \
                 else [bp, bs]
             for bb in sides:
-                zs.append([math.radians(bb), c["range_m"][i], c["range_rate_mps"][i]])
+                zs.append([math.radians(bb), rng[k], rdot[k]])
                 rows.append(i)
-        out.append((float(t[seg[0]]), np.array(zs), np.array(rows, np.int64), own[0]))
+        out.append((ts, np.array(zs), np.array(rows, np.int64), own[0]))
     return out
 
 
-def contacts_manager(cfg: dict[str, Any]) -> TrackManager:
-    """Track manager for contacts: EKF with the bearing-range-range-rate model."""
+def contacts_manager(cfg: dict[str, Any],
+                     may_start: dict[float, np.ndarray] | None = None) -> TrackManager:
+    """Track manager for contacts: EKF with the bearing-range-range-rate model.
+
+    Parameters
+    ----------
+    cfg : dict
+        Settings of :func:`split_config`.
+    may_start : dict, optional
+        Scan time -> boolean mask (m,) of the measurements allowed to start a tentative
+        track (e.g. the contacts flagged ``moving``, ``initiate_moving``); every other
+        measurement may still update a track. None: all may.
+
+    Returns
+    -------
+    TrackManager
+    """
     from arrayproc.track.models.bearing_range_rate import BearingRangeRate
 
     cc = cfg["contacts"]
@@ -424,7 +477,10 @@ def contacts_manager(cfg: dict[str, Any]) -> TrackManager:
     filt = EKFBatch(ConstantVelocity(2, float(cc["q"])), model)
     sv = float(cc["sigma_speed_mps"])
 
-    def init(Z: np.ndarray, t: float, own: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
+    def init(Z: np.ndarray, t: float, own: Any, j: int
+             ) -> tuple[np.ndarray, np.ndarray] | None:
+        if may_start is not None and not may_start[t][j]:
+            return None
         return model.inverse(Z[j], own, sv)
 
     return TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
@@ -542,8 +598,18 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
         g = _group(prod, "contacts", products_path)
         c = _columns(g, ("time", "range_m", "bearing_port_deg", "bearing_stbd_deg",
                          "range_rate_mps"), products_path)
-        scans = contact_scans(c, nav, bool(cfg["contacts"]["mirror"]))
-        mgr = contacts_manager(cfg)
+        if "ping" in g:
+            c["ping"] = np.asarray(g["ping"], np.int64)
+        scans = contact_scans(c, nav, bool(cfg["contacts"]["mirror"]),
+                              _sound_speed(products_path))
+        may_start = None
+        if cfg["contacts"]["initiate_moving"]:
+            if "moving" not in g:
+                raise FormatError(f"{products_path}: tracker.contacts.initiate_moving needs "
+                                  "the contacts' 'moving' column")
+            moving = np.asarray(g["moving"], bool)
+            may_start = {t: moving[r] for t, _Z, r, _o in scans}
+        mgr = contacts_manager(cfg, may_start)
         for t, Z, _rows, own in scans:
             mgr.step(t, Z, own)
         _attach_rows(mgr.tracks, [(t, r) for t, _Z, r, _o in scans])
@@ -563,6 +629,22 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     return mgr.tracks, [_cartesian_rows(tr, nav, 3) for tr in mgr.tracks]
 
 
+def _sound_speed(products_path: str) -> float:
+    """Sound speed (m/s) of the recording a products file was made from (its root attribute
+    ``source``); the recording format's default when the recording cannot be opened."""
+    import os
+
+    from arrayproc.io.products import read_products
+    from arrayproc.io.recording import DEFAULT_SOUND_SPEED, Recording
+
+    src = _s(read_products(products_path)["/"].get("source", ""))
+    rec = resolve_beside(src, products_path) if src else ""
+    if not rec or not os.path.exists(rec):
+        return DEFAULT_SOUND_SPEED
+    with Recording(rec, require_geometry=False) as r:
+        return float(r.sound_speed)
+
+
 def _attach_rows(tracks: list[Track], scans: list[tuple[float, np.ndarray]]) -> None:
     rows_at = dict(scans)
     for tr in tracks:
@@ -580,7 +662,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     import os
 
     from arrayproc.io.products import ProductsWriter, read_products
-    from arrayproc.track.single import _read_nav, _resolve
+    from arrayproc.track.single import _read_nav
 
     cfg, tma_cfg = split_config(config_path)
     if not os.path.exists(products_path):
@@ -590,7 +672,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     nav = None
     rec = ""
     if src:
-        rec = _resolve(src, config_path if tma_cfg.get("nav") else products_path)
+        rec = resolve_beside(src, config_path if tma_cfg.get("nav") else products_path)
         nav = _read_nav(rec)
     elif cfg["measurements"] != "positions":
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
