@@ -3,6 +3,7 @@
 
     .venv/bin/python scripts/bench_batch.py [--dir DIR] [--seconds 60] [--channels 64]
         [--recordings 4] [--chain towed_passive] [--repeats 2] [--mc-runs 500] [--no-mc]
+        [--no-malloc-check] [--json OUT]
 
 1. Simulates ``--recordings`` recordings (the bundled towed-passive scenario with its line
    array widened to ``--channels`` hydrophones, ``--seconds`` s each, seeds 1, 2, …).
@@ -11,7 +12,12 @@
 3. Batch: the same files as one batch on a LocalCluster of 1 worker (2 threads, the same as
    the direct run) and of 2 workers (1 thread each), each after a warm-up batch so that imports
    and JIT are paid; wall time from submit to the last result. Overhead per task = batch with
-   1 worker / direct − 1; speed-up = 1 worker / 2 workers.
+   1 worker / direct − 1 (wall and CPU, in pairs run seconds apart); speed-up = 1 worker /
+   2 workers. CPU, user and system time and minor page faults of the tasks (the workers'
+   ``getrusage``) and of the direct run are printed beside every wall time.
+   Last, unless ``--no-malloc-check``: 1 worker with Dask's own worker environment
+   (``MALLOC_TRIM_THRESHOLD_=65536``, what the batch used before), paired with the direct
+   run: the cost of that setting (docs/performance/batch.md).
 4. The L-R Monte Carlo table (:func:`arrayproc.evaluate.distributed.lr_table`) on 1 worker and on
    2 workers, wall time, and a check that both give the same numbers.
 
@@ -25,6 +31,7 @@ import argparse
 import json
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -60,24 +67,33 @@ def simulate(d: Path, n: int, seconds: float, channels: int) -> list[Path]:
     return out
 
 
-def direct(recs: list[Path], chain: Path, outdir: Path) -> tuple[float, float]:
-    """Each file as ``arrayproc process`` runs it, in this process: (wall s, CPU s)."""
+def usage() -> dict:
+    """This process's user and system CPU seconds and minor page faults so far."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return {"user_s": r.ru_utime, "sys_s": r.ru_stime, "minflt": r.ru_minflt}
+
+
+def direct(recs: list[Path], chain: Path, outdir: Path) -> dict:
+    """Each file as ``arrayproc process`` runs it, in this process: wall s, CPU s, user and
+    system s, minor page faults."""
     from arrayproc.app.api import load_chain, run_chain
     from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import Recording
     outdir.mkdir(exist_ok=True)
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0, u0 = time.perf_counter(), time.process_time(), usage()
     for r in recs:
         spec = load_chain(str(chain))
         with Recording(r) as rec, ProductsWriter(outdir / f"{r.stem}.h5", source=str(r),
                                                  chain=spec.text) as w:
             run_chain(rec, spec, w)
-    return time.perf_counter() - t0, time.process_time() - c0
+    u1 = usage()
+    return {"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
+            **{k: u1[k] - u0[k] for k in u0}}
 
 
-def batch_time(client, recs: list[Path], chain: Path, outdir: Path,
-               threads: int) -> tuple[float, float]:
-    """One batch: (wall s from submit to the last result, CPU s of the tasks, summed)."""
+def batch_time(client, recs: list[Path], chain: Path, outdir: Path, threads: int) -> dict:
+    """One batch: wall s from submit to the last result; CPU, user and system s and minor
+    page faults of the tasks, summed."""
     from arrayproc.app.batch import run_batch
     t0 = time.perf_counter()
     res = run_batch(recs, chain, outdir, client, threads=threads)
@@ -85,12 +101,21 @@ def batch_time(client, recs: list[Path], chain: Path, outdir: Path,
     bad = [r for r in res if r.status != "done"]
     if bad:
         raise SystemExit(f"batch failed: {bad}")
-    return dt, sum(r.cpu_seconds for r in res)
+    return {"wall_s": dt, "cpu_s": sum(r.cpu_seconds for r in res),
+            "user_s": sum(r.user_seconds for r in res),
+            "sys_s": sum(r.system_seconds for r in res),
+            "minflt": sum(r.minor_faults for r in res)}
 
 
-def cluster(n: int, threads: int):
+def cluster(n: int, threads: int, malloc_defaults: bool = True):
     from arrayproc.app.batch import start_client
-    return start_client(workers=n, threads=threads)
+    return start_client(workers=n, threads=threads, malloc_defaults=malloc_defaults)
+
+
+def line(what: str, r: dict, n: int) -> str:
+    return (f"{what}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU (user {r['user_s']:.1f}, "
+            f"system {r['sys_s']:.1f}), {r['minflt'] / 1e3:.0f} k minor faults for {n} files "
+            f"({load()})")
 
 
 def stats(xs: list[float]) -> dict:
@@ -108,6 +133,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mc-runs", type=int, default=500)
     ap.add_argument("--mc-filters", default="ekf,ukf,ckf,ghf")
     ap.add_argument("--no-mc", action="store_true")
+    ap.add_argument("--no-malloc-check", action="store_true",
+                    help="skip the 1-worker batch with Dask's MALLOC_TRIM_THRESHOLD_")
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
     d = Path(a.dir)
@@ -128,40 +155,61 @@ def main(argv: list[str] | None = None) -> int:
     print(f"arrayproc process (CLI, one file, with start-up): {out['cli_one_file_s']:.1f} s "
           f"({load()})", flush=True)
 
-    for n_workers, threads in ((1, cores), (1, 1), (2, max(1, cores // 2))):
-        key = f"batch_{n_workers}w_{threads}t"
+    # the last configuration starts its workers with Dask's MALLOC_TRIM_THRESHOLD_=65536 (what
+    # the batch did before): the cost of that setting, paired with the direct run. It runs last
+    # because the nanny writes the variable into this process's environment, whence any later
+    # worker would inherit it; the environment is restored after it.
+    configs = [(1, cores, True), (1, 1, True), (2, max(1, cores // 2), True)]
+    if not a.no_malloc_check:
+        configs.append((1, cores, False))
+    for n_workers, threads, malloc_defaults in configs:
+        key = f"batch_{n_workers}w_{threads}t" + ("" if malloc_defaults else "_dask_malloc")
+        paired = n_workers == 1 and threads == cores  # overhead: direct and batch in pairs
+        saved = os.environ.get("MALLOC_TRIM_THRESHOLD_")
         t_start = time.perf_counter()
-        client, clu = cluster(n_workers, threads)
-        walls, cpus, pairs = [], [], []
+        client, clu = cluster(n_workers, threads, malloc_defaults)
+        runs, pairs = [], []
         try:
             client.wait_for_workers(n_workers)
             t_up = time.perf_counter() - t_start
+            env = client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_")
             batch_time(client, recs[:n_workers], chain, d / "bwarm", threads)
             for _ in range(a.repeats):
-                if threads == cores and n_workers == 1:  # overhead: direct and batch in pairs
-                    td, cd = direct(recs, chain, d / "direct")
-                    print(f"direct (as arrayproc process, in this process, {cores} threads): "
-                          f"{td:.1f} s wall, {cd:.1f} s CPU for {len(recs)} files ({load()})",
-                          flush=True)
-                    out.setdefault("direct", []).append({"wall_s": td, "cpu_s": cd})
-                tb, cb = batch_time(client, recs, chain, d / key, threads)
-                walls.append(tb)
-                cpus.append(cb)
-                print(f"batch, {n_workers} worker(s) x {threads} thread(s): {tb:.1f} s wall, "
-                      f"{cb:.1f} s task CPU for {len(recs)} files ({load()})", flush=True)
-                if threads == cores and n_workers == 1:
-                    pairs.append(tb / td - 1.0)
+                if paired:
+                    rd = direct(recs, chain, d / "direct")
+                    print(line(f"direct (as arrayproc process, in this process, {cores} "
+                               "threads)", rd, len(recs)), flush=True)
+                    out.setdefault("direct", []).append(rd)
+                rb = batch_time(client, recs, chain, d / key, threads)
+                runs.append(rb)
+                print(line(f"batch, {n_workers} worker(s) x {threads} thread(s), worker "
+                           f"MALLOC_TRIM_THRESHOLD_={sorted(set(env.values()))[0]}", rb,
+                           len(recs)), flush=True)
+                if paired:
+                    pairs.append({"wall_pct": 100.0 * (rb["wall_s"] / rd["wall_s"] - 1.0),
+                                  "cpu_pct": 100.0 * (rb["cpu_s"] / rd["cpu_s"] - 1.0)})
         finally:
             client.close()
             clu.close()
-        out[key] = {**stats(walls), "task_cpu_s": cpus, "cluster_start_s": t_up}
+            if saved is None:
+                os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+            else:
+                os.environ["MALLOC_TRIM_THRESHOLD_"] = saved
+        out[key] = {**stats([r["wall_s"] for r in runs]), "runs": runs,
+                    "task_cpu_s": [r["cpu_s"] for r in runs], "cluster_start_s": t_up,
+                    "worker_malloc_trim_threshold": sorted(set(map(str, env.values())))}
         if pairs:
-            out["overhead_pct_pairs"] = [100.0 * p for p in pairs]
+            out[key]["overhead_pairs"] = pairs
+            print(f"per-task overhead of {key} vs direct, paired: "
+                  + ", ".join(f"{q['wall_pct']:+.1f} % wall / {q['cpu_pct']:+.1f} % CPU"
+                              for q in pairs), flush=True)
     b1 = out[f"batch_1w_{cores}t"]
     b2 = out[f"batch_2w_{max(1, cores // 2)}t"]
     b11 = out["batch_1w_1t"]
+    out["overhead_pct_pairs"] = [q["wall_pct"] for q in b1["overhead_pairs"]]
     out["speedup_2w_vs_1w_min"] = b1["min_s"] / b2["min_s"]
     out["speedup_2w_vs_1w1t_min"] = b11["min_s"] / b2["min_s"]
+    out["speedup_2w_vs_direct_min"] = min(x["wall_s"] for x in out["direct"]) / b2["min_s"]
     # with the cores free, 2 single-thread workers on 4 equal tasks finish in half the summed
     # task CPU time of 2 workers; 1 worker x 1 thread in its summed task CPU time
     out["speedup_2w_vs_1w1t_cpu_projection"] = min(b11["task_cpu_s"]) / (min(b2["task_cpu_s"]) / 2)
@@ -169,10 +217,16 @@ def main(argv: list[str] | None = None) -> int:
     out["overhead_cpu_pct"] = 100.0 * (min(b1["task_cpu_s"]) / cpu_direct - 1.0)
     print(f"speed-up 2 workers vs 1 worker x {cores} threads: {out['speedup_2w_vs_1w_min']:.2f}x "
           f"(min wall); vs 1 worker x 1 thread: {out['speedup_2w_vs_1w1t_min']:.2f}x (min wall), "
-          f"{out['speedup_2w_vs_1w1t_cpu_projection']:.2f}x (task CPU projection)")
+          f"{out['speedup_2w_vs_1w1t_cpu_projection']:.2f}x (task CPU projection); vs direct: "
+          f"{out['speedup_2w_vs_direct_min']:.2f}x (min wall)")
     print("per-task overhead vs direct, paired wall: "
           + ", ".join(f"{p:+.1f} %" for p in out["overhead_pct_pairs"])
-          + f"; task CPU: {out['overhead_cpu_pct']:+.1f} %", flush=True)
+          + f"; task CPU (min vs min): {out['overhead_cpu_pct']:+.1f} %", flush=True)
+    dm = out.get(f"batch_1w_{cores}t_dask_malloc")
+    if dm:
+        out["dask_malloc_cpu_pct"] = 100.0 * (min(dm["task_cpu_s"]) / cpu_direct - 1.0)
+        print(f"with Dask's MALLOC_TRIM_THRESHOLD_=65536 in the worker: task CPU "
+              f"{out['dask_malloc_cpu_pct']:+.1f} % vs direct (min vs min)", flush=True)
 
     if not a.no_mc:
         from arrayproc.evaluate.distributed import lr_table

@@ -48,6 +48,8 @@ LIST_SUFFIXES = (".txt", ".lst", ".list")
 #: Environment variables that size the thread pools of numerical libraries in a worker.
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                "NUMBA_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+#: glibc malloc variable Dask's nanny sets in its workers (``distributed.nanny.pre-spawn-environ``).
+MALLOC_VAR = "MALLOC_TRIM_THRESHOLD_"
 
 
 def require_dask() -> Any:
@@ -206,12 +208,14 @@ def process_task(recording: str, chain_text: str, output: str, threads: int, see
     -------
     dict
         ``status`` ("done" or "failed"), ``error`` (one line), ``seconds`` (wall),
-        ``cpu_seconds`` (the worker process's CPU time, all threads), ``blocks``.
+        ``cpu_seconds`` (the worker process's CPU time, all threads), ``user_seconds``,
+        ``system_seconds`` and ``minor_faults`` (its ``getrusage``, where available),
+        ``blocks``.
     """
     from arrayproc.app.api import build_chain, run_chain
     from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import Recording
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0, u0 = time.perf_counter(), time.process_time(), _usage()
     _limit_threads(threads)
     warnings: list[str] = []
     try:
@@ -223,8 +227,21 @@ def process_task(recording: str, chain_text: str, output: str, threads: int, see
                 n = run_chain(r, spec, out, read[0], read[1], log=warnings.append)
     except ArrayprocError as e:  # a bad input or chain fails alone, without retries
         return {"status": "failed", "error": str(e), "seconds": time.perf_counter() - t0}
+    u1 = _usage()
     return {"status": "done", "error": "", "seconds": time.perf_counter() - t0, "blocks": n,
-            "cpu_seconds": time.process_time() - c0, "warnings": warnings}
+            "cpu_seconds": time.process_time() - c0, "warnings": warnings,
+            **{k: u1[k] - u0[k] for k in u0}}
+
+
+def _usage() -> dict[str, float]:
+    """The process's user and system CPU seconds and minor page faults so far (all threads)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return {}
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return {"user_seconds": r.ru_utime, "system_seconds": r.ru_stime,
+            "minor_faults": float(r.ru_minflt)}
 
 
 def merge_task(parts: Sequence[str], results: Sequence[dict[str, Any]], output: str,
@@ -274,16 +291,32 @@ class TaskResult:
     error: str = ""
     seconds: float = 0.0
     cpu_seconds: float = 0.0
+    user_seconds: float = 0.0
+    system_seconds: float = 0.0
+    minor_faults: float = 0.0
     segments: int = 1
     parts_run: int = 0
     warnings: list[str] = field(default_factory=list)
 
 
 def start_client(workers: int | None = None, scheduler: str | None = None,
-                 threads: int | None = None) -> tuple[Any, Any]:
+                 threads: int | None = None, malloc_defaults: bool = True) -> tuple[Any, Any]:
     """A client of the cluster at ``scheduler``, or of a new LocalCluster of ``workers``
     worker processes (default: the cores), one task at a time each, with ``threads`` threads
     (default ``cores // workers``) for BLAS, OpenMP and numba.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes (default: the cores).
+    scheduler : str, optional
+        Address of an existing scheduler (then no local cluster starts).
+    threads : int, optional
+        Threads per local worker (default ``cores // workers``).
+    malloc_defaults : bool
+        Start the local workers with glibc's malloc defaults, as ``arrayproc process`` runs
+        (True), or with Dask's ``MALLOC_TRIM_THRESHOLD_=65536`` (False: only for measuring
+        its cost, ``scripts/bench_batch.py``).
 
     Returns
     -------
@@ -301,10 +334,19 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
         raise ConfigError(f"--workers must be >= 1, got {n}")
     t = threads or worker_threads(n)
     env = {v: str(t) for v in THREAD_VARS}
-    # a free port: the scheduler's HTTP server (and the dashboard, with bokeh) always runs
-    cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                       env=env, dashboard_address=":0",
-                                       silence_logs=40)
+    import dask
+    # The nanny's pre-spawn environment sets MALLOC_TRIM_THRESHOLD_=65536 in every worker.
+    # Setting any glibc malloc threshold switches off its dynamic mmap threshold, so every
+    # array above 128 KiB is mmap-ed fresh and unmapped on free: 17x the minor page faults and
+    # +40-55 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
+    # defaults, as `arrayproc process` does (None removes the variable; one the user set in
+    # the environment is inherited unchanged).
+    unset = {f"distributed.nanny.pre-spawn-environ.{MALLOC_VAR}": None} if malloc_defaults else {}
+    with dask.config.set(unset):
+        # a free port: the scheduler's HTTP server (and the dashboard, with bokeh) always runs
+        cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                           env=env, dashboard_address=":0",
+                                           silence_logs=40)
     return distributed.Client(cluster), cluster
 
 
@@ -438,6 +480,9 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
                 res.status, res.error = r["status"], r["error"]
                 res.seconds = r.get("seconds", 0.0)
                 res.cpu_seconds = r.get("cpu_seconds", 0.0)
+                res.user_seconds = r.get("user_seconds", 0.0)
+                res.system_seconds = r.get("system_seconds", 0.0)
+                res.minor_faults = r.get("minor_faults", 0.0)
                 res.warnings = r.get("warnings", [])
             except Exception as e:  # noqa: BLE001 - retries exhausted or worker lost: report it
                 res.status = "failed"
