@@ -5,6 +5,7 @@ HFM -> BPSK bracket mode of 4.2.3).
 
     .venv/bin/python scripts/reproduce_active.py [--parts waveform,cfar,scenario]
         [--out DIR] [--json OUT] [--duration S] [--recording REC.h5] [--cfar-slow]
+        [--beams START,STOP,COUNT] [--blank-direct] [--reuse]
 
 waveform: the 4 s, 2047-bit, 1500 Hz BPSK through the stages' bank
 (:mod:`arrayproc.stages.active.bank`): one noiseless echo, 3 dB widths in range rate and range
@@ -15,21 +16,23 @@ cfar: measured false-alarm rate of CA and OS (and GO, SO) on exponential noise a
 design pfa (1e-3, 1e-4; with ``--cfar-slow`` also 1e-5, 1e-6), Pd of a Swerling-1 target
 against the closed form (CA, pfa 1e-6, N = 32), ``cfar_pd.png``.
 
-scenario: ``data/scenarios/active_bpsk.toml`` (its 4 s 2047-bit BPSK every 30 s) plus an HFM of
-the same band 15 s after each BPSK ping (a second simulation of the same scenario, noise and
-radiated noise off, added sample by sample, so the pings alternate as in thesis 4.2.1); the
-chain: ``active_beams`` -> ``matched_filter`` -> ``cfar`` (full cube, every ping) and a second
-``matched_filter`` in bracket mode around the previous HFM ping's contacts -> ``cfar``.
-Contacts are associated with ``/truth/echoes`` (range within 30 m, cone within 10 deg).
+scenario: ``data/scenarios/active_hfm_bpsk.toml`` (an HFM of the BPSK's band, then the 4 s
+2047-bit BPSK 15 s later, every 30 s: one simulated recording whose /active carries both
+replicas and the schedule; ``--duration`` lengthens it); the chain: ``active_beams`` (cone
+sector ``--beams``, ``--blank-direct`` for its direct-blast gate) -> ``matched_filter`` ->
+``cfar`` (full cube, every ping) and a second ``matched_filter`` in bracket mode around the
+previous HFM ping's contacts -> ``cfar``. Contacts are associated with ``/truth/echoes``
+(range within 30 m, cone within 10 deg; clutter also within two range cells and 3 deg).
 Expected echo SNR after processing: echo level - noise spectral level + 10 log10 T + 10 log10
-(elements) - 1.76 dB (Hann shading loss).
+(elements) - 1.76 dB (Hann shading loss), with blanking + 10 log10 of the echo's fraction
+received after the gate.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import shutil
+import os
 import time
 from pathlib import Path
 
@@ -182,63 +185,23 @@ def part_cfar(out: Path, slow: bool) -> dict:
     return res
 
 
-def make_alternating(out: Path, duration: float | None) -> Path:
-    """The bundled active scenario plus an HFM ping 15 s after each BPSK ping."""
+def simulate_schedule(out: Path, duration: float | None) -> Path:
+    """``data/scenarios/active_hfm_bpsk.toml`` (HFM, then the BPSK 15 s later, every 30 s: one
+    recording with both replicas and the schedule in /active), optionally lengthened."""
     from importlib.resources import files
 
-    import h5py
     import tomllib
 
-    from arrayproc.io.recording import Recording
     from arrayproc.sim.run import simulate
     from arrayproc.sim.scenario import parse_scenario
-    text = files("arrayproc.data").joinpath("scenarios/active_bpsk.toml").read_text()
+    text = files("arrayproc.data").joinpath("scenarios/active_hfm_bpsk.toml").read_text()
     base = tomllib.loads(text)
     if duration:
         base["recording"]["duration"] = float(duration)
-    bpsk_path, hfm_path, both = out / "bpsk.h5", out / "hfm.h5", out / "active_hfm_bpsk.h5"
-    if not bpsk_path.exists():
-        simulate(parse_scenario(base, "active_bpsk"), bpsk_path)
-    h = json.loads(json.dumps(base))
-    a = h["active"]
-    bw = 2047 / a["duration"]
-    for k in ("fc", "bits"):
-        a.pop(k)
-    a.update(waveform="hfm", f0=1500.0 - bw / 2, f1=1500.0 + bw / 2,
-             first=a["first"] + a["interval"] / 2)
-    h.pop("noise", None)
-    for s in h.get("source", []):
-        s.pop("broadband", None)
-        s["tonals"] = [{"freq": 350.0, "level_db": -60.0}]
-    if not hfm_path.exists():
-        simulate(parse_scenario(h, "active_hfm"), hfm_path)
-    shutil.copy(bpsk_path, both)
-    with Recording(hfm_path) as rh:
-        ah = rh.active()
-    with Recording(bpsk_path) as rb:
-        ab = rb.active()
-    with h5py.File(both, "r+") as f, h5py.File(hfm_path, "r") as g:
-        td, th = f["time_data"], g["time_data"]
-        for i in range(0, td.shape[0], 1 << 16):
-            td[i:i + (1 << 16)] += th[i:i + (1 << 16)]
-        t = np.concatenate([ab.time, ah.time])
-        order = np.argsort(t)
-        names = sorted(set(ab.waveforms) | set(ah.waveforms))
-        idx = np.concatenate([np.full(ab.time.size, names.index("bpsk")),
-                              np.full(ah.time.size, names.index("hfm"))])[order]
-        del f["active/pings"]
-        f.create_dataset("active/pings/time", data=t[order])
-        f.create_dataset("active/pings/waveform", data=idx.astype(np.int64))
-        rep = ah.waveforms["hfm"]
-        d = f.create_dataset("active/waveforms/hfm", data=rep.samples)
-        for k, v in g["active/waveforms/hfm"].attrs.items():
-            d.attrs[k] = v
-        # truth echoes: BPSK pings renumbered into the merged schedule
-        new = np.empty(t.size, int)
-        new[order] = np.arange(t.size)
-        e = f["truth/echoes/ping"]
-        e[...] = new[: ab.time.size][e[()]]
-    return both
+    path = out / "active_hfm_bpsk.h5"
+    if not path.exists():
+        simulate(parse_scenario(base, "active_hfm_bpsk.toml"), path)
+    return path
 
 
 CHAIN = """
@@ -247,7 +210,8 @@ block = 16384
 [[stage]]
 type = "active_beams"
 name = "beams"
-beams = {{ start = 0.0, stop = 180.0, count = 181 }}
+beams = {{ start = {b0}, stop = {b1}, count = {nb} }}
+blank_direct = {blank}
 [[stage]]
 type = "matched_filter"
 name = "mf"
@@ -270,7 +234,9 @@ min_range_m = 150.0
 
 
 def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
-                  range_m: float, cone_deg: float, reuse: bool = False) -> dict:
+                  range_m: float, cone_deg: float, reuse: bool = False,
+                  beams: tuple[float, float, int] = (0.0, 180.0, 181),
+                  blank: bool = False) -> dict:
     from arrayproc.chain import build_chain, run_chain
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.recording import Recording
@@ -278,12 +244,13 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     from arrayproc.stages import load_all
     load_all()
     t0 = time.perf_counter()
-    if rec_path is None and reuse and (out / "active_hfm_bpsk.h5").exists():
-        rec_path = out / "active_hfm_bpsk.h5"
-    rec_path = rec_path or make_alternating(out, duration)
-    t_sim = time.perf_counter() - t0
-    prod = out / "active_products.h5"
-    spec = build_chain(CHAIN.format(range_m=range_m, cone_deg=cone_deg))
+    c_sim0 = time.process_time()
+    rec_path = rec_path or simulate_schedule(out, duration)
+    t_sim, c_sim = time.perf_counter() - t0, time.process_time() - c_sim0
+    prod = out / ("active_products_blank.h5" if blank else "active_products.h5")
+    spec = build_chain(CHAIN.format(range_m=range_m, cone_deg=cone_deg, b0=beams[0],
+                                    b1=beams[1], nb=int(beams[2]),
+                                    blank="true" if blank else "false"))
     t0 = time.perf_counter()
     c0 = time.process_time()
     if not (reuse and prod.exists()):
@@ -294,6 +261,7 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
         tr = echo_truth(rec)
         act = rec.active()
         n_el = rec.n_channels
+        n_samples, rec_fs = rec.n_samples, rec.fs
     g = read_products(prod)
     full = {k: np.asarray(v) for k, v in g["contacts"].items() if k not in ("attrs", "kind",
                                                                             "stage")}
@@ -304,8 +272,14 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     cell = C / (2 * act.waveforms["bpsk"].bandwidth)
     noise_db = 55.0
     T = act.waveforms["bpsk"].duration
-    res = {"recording": str(rec_path), "simulate_s": t_sim, "process_wall_s": t_proc,
-           "process_cpu_s": c_proc, "bpsk_pings": len(bpsk_pings),
+    # end of the direct arrival (s after the ping) at the farthest element, default margin
+    with Recording(rec_path) as rec:
+        pos = rec.positions
+    gate_end = float(np.max(np.linalg.norm(pos - act.projector, axis=1))) / C + T + 0.02
+    res = {"recording": str(rec_path), "simulate_s": t_sim, "simulate_cpu_s": c_sim,
+           "process_wall_s": t_proc, "process_cpu_s": c_proc, "products": str(prod),
+           "beams": list(beams), "blank_direct": blank, "loadavg": os.getloadavg(),
+           "bpsk_pings": len(bpsk_pings),
            "hfm_pings": len(act.waveform) - len(bpsk_pings), "range_cell_m": cell}
     rows = []
     sub = tr["kind"] == "target"
@@ -314,12 +288,18 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
         if k.size == 0:
             continue
         k = int(k[0])
+        if tr["time"][k] + T > n_samples / rec_fs:  # echo not wholly in the recording
+            continue
         snr_pred = (tr["level_db"][k] - noise_db + 10 * np.log10(T) + 10 * np.log10(n_el)
                     - 1.76)
+        delay = float(tr["time"][k] - act.time[p])
+        if blank:  # the part of the echo received after the direct-blast gate
+            snr_pred += 10 * np.log10(max(1e-6, min(1.0, (delay - gate_end) / T + 1.0)))
         m = np.flatnonzero((full["ping"] == p) & (wv == "bpsk")
                            & (np.abs(full["range_m"] - tr["range_array_m"][k]) < 30.0)
                            & (np.abs(full["cone_deg"] - tr["cone_deg"][k]) < 10.0))
-        row = {"ping": p, "snr_expected_db": float(snr_pred),
+        row = {"ping": p, "snr_expected_db": float(snr_pred), "delay_s": delay,
+               "inside_direct_blast": bool(delay < gate_end),
                "truth_range_m": float(tr["range_array_m"][k]),
                "truth_range_rate": float(tr["range_rate_mps"][k]),
                "truth_cone": float(tr["cone_deg"][k]), "detected": bool(m.size)}
@@ -382,6 +362,24 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
             res["unassociated_bpsk_contacts"] = int(((idx < 0) & sens).sum())
     res["clutter_echoes_in_bpsk_pings"] = int(np.sum((tr["kind"] == "clutter")
                                                      & np.isin(tr["ping"], bpsk_pings)))
+    in_sector = (tr["cone_deg"] >= beams[0]) & (tr["cone_deg"] <= beams[1])
+    res["clutter_echoes_in_bpsk_pings_in_sector"] = int(np.sum(
+        (tr["kind"] == "clutter") & np.isin(tr["ping"], bpsk_pings) & in_sector))
+    # near range: clutter echoes arriving while the direct blast is still received
+    idx = associate(full, tr, range_gate=2 * cell, cone_gate=3.0)
+    delay_all = tr["time"] - act.time[tr["ping"]]
+    for name, lo, hi in (("near_inside_blast", 0.0, gate_end), ("far", gate_end, np.inf)):
+        sel = ((tr["kind"] == "clutter") & np.isin(tr["ping"], bpsk_pings)
+               & (delay_all >= lo) & (delay_all < hi) & in_sector)
+        hit = np.unique(idx[(idx >= 0) & sens])
+        det = np.intersect1d(np.flatnonzero(sel), hit)
+        near_c = sens & (full["range_m"] < C * gate_end / 2)
+        res[f"clutter_{name}"] = {
+            "delay_s": [lo, None if not np.isfinite(hi) else hi],
+            "echoes": int(sel.sum()), "detected_tight": int(det.size),
+            "detected_fraction": float(det.size / max(1, sel.sum()))}
+        if name.startswith("near"):
+            res[f"clutter_{name}"]["bpsk_contacts_nearer_than_gate"] = int(near_c.sum())
     if br is not None and rows:
         with_prev = [r for r in rows if any(n == "hfm" for n in act.waveform[:r["ping"]])]
         cf = sum(r["cells_full"] or 0 for r in with_prev)
@@ -390,13 +388,21 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
                           "pings_with_previous_hfm": [r["ping"] for r in with_prev],
                           "cells_full": cf, "cells_bracket": cb,
                           "cell_fraction": cb / max(cf, 1),
+                          # the same against the shipped chain's 181-beam fan (equal cells
+                          # per beam; the brackets lie inside the sector)
+                          "cell_fraction_of_181_beams": cb / max(cf * 181 / beams[2], 1),
                           "same_submarine_contacts": all(
                               r.get("bracket_detected") == r["detected"]
-                              and abs(r.get("bracket_range_m", np.nan) - r["range_m"]) < 0.5
-                              and abs(r.get("bracket_range_rate", np.nan) - r["range_rate"])
-                              < 0.05 for r in with_prev)}
+                              and abs(r.get("bracket_range_m", np.nan)
+                                      - r.get("range_m", np.nan)) < 0.5
+                              and abs(r.get("bracket_range_rate", np.nan)
+                                      - r.get("range_rate", np.nan)) < 0.05
+                              for r in with_prev if r["detected"] or r.get("bracket_detected")),
+                          "submarine_missed_by_both": [r["ping"] for r in with_prev
+                                                       if not r["detected"]
+                                                       and not r.get("bracket_detected")]}
     from arrayproc.plots.contacts import plot_contacts
-    plot_contacts(str(prod), str(out / "contacts.png"))
+    plot_contacts(str(prod), str(out / ("contacts_blank.png" if blank else "contacts.png")))
     return res
 
 
@@ -410,12 +416,18 @@ def main() -> None:
     ap.add_argument("--bracket-range", type=float, default=200.0)
     ap.add_argument("--bracket-cone", type=float, default=5.0)
     ap.add_argument("--cfar-slow", action="store_true")
+    ap.add_argument("--beams", default="0,180,181",
+                    help="scenario: cone angles start,stop,count of active_beams (deg)")
+    ap.add_argument("--blank-direct", action="store_true",
+                    help="scenario: active_beams with blank_direct = true")
     ap.add_argument("--reuse", action="store_true",
                     help="scenario: reuse OUT's recording and products when present")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     parts = args.parts.split(",")
+    b = args.beams.split(",")
+    beams = (float(b[0]), float(b[1]), int(b[2]))
     res = {}
     if "waveform" in parts:
         res["waveform"] = part_waveform(out)
@@ -426,7 +438,7 @@ def main() -> None:
     if "scenario" in parts:
         res["scenario"] = part_scenario(out, Path(args.recording) if args.recording else None,
                                         args.duration, args.bracket_range, args.bracket_cone,
-                                        args.reuse)
+                                        args.reuse, beams, args.blank_direct)
         print(json.dumps({k: v for k, v in res["scenario"].items() if k != "submarine"},
                          indent=1), flush=True)
     if args.json:
