@@ -156,16 +156,13 @@ def main(argv: list[str] | None = None) -> int:
           f"({load()})", flush=True)
 
     # the last configuration starts its workers with Dask's MALLOC_TRIM_THRESHOLD_=65536 (what
-    # the batch did before): the cost of that setting, paired with the direct run. It runs last
-    # because the nanny writes the variable into this process's environment, whence any later
-    # worker would inherit it; the environment is restored after it.
+    # the batch did before): the cost of that setting, paired with the direct run
     configs = [(1, cores, True), (1, 1, True), (2, max(1, cores // 2), True)]
     if not a.no_malloc_check:
         configs.append((1, cores, False))
     for n_workers, threads, malloc_defaults in configs:
         key = f"batch_{n_workers}w_{threads}t" + ("" if malloc_defaults else "_dask_malloc")
         paired = n_workers == 1 and threads == cores  # overhead: direct and batch in pairs
-        saved = os.environ.get("MALLOC_TRIM_THRESHOLD_")
         t_start = time.perf_counter()
         client, clu = cluster(n_workers, threads, malloc_defaults)
         runs, pairs = [], []
@@ -191,10 +188,6 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             client.close()
             clu.close()
-            if saved is None:
-                os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-            else:
-                os.environ["MALLOC_TRIM_THRESHOLD_"] = saved
         out[key] = {**stats([r["wall_s"] for r in runs]), "runs": runs,
                     "task_cpu_s": [r["cpu_s"] for r in runs], "cluster_start_s": t_up,
                     "worker_malloc_trim_threshold": sorted(set(map(str, env.values())))}

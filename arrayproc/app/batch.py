@@ -50,6 +50,7 @@ THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                "NUMBA_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
 #: glibc malloc variable Dask's nanny sets in its workers (``distributed.nanny.pre-spawn-environ``).
 MALLOC_VAR = "MALLOC_TRIM_THRESHOLD_"
+MMAP_VAR = "MALLOC_MMAP_THRESHOLD_"
 
 
 def require_dask() -> Any:
@@ -338,16 +339,55 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
     # The nanny's pre-spawn environment sets MALLOC_TRIM_THRESHOLD_=65536 in every worker.
     # Setting any glibc malloc threshold switches off its dynamic mmap threshold, so every
     # array above 128 KiB is mmap-ed fresh and unmapped on free: 17x the minor page faults and
-    # +40-55 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
-    # defaults, as `arrayproc process` does (None removes the variable; one the user set in
-    # the environment is inherited unchanged).
-    unset = {f"distributed.nanny.pre-spawn-environ.{MALLOC_VAR}": None} if malloc_defaults else {}
+    # +40-90 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
+    # defaults, as `arrayproc process` does: None removes the variable from the pre-spawn
+    # environment. The nanny also writes it into this process's environment, whence workers
+    # started later would inherit it: Dask's own value found here is removed too (a value the
+    # user chose is inherited unchanged).
+    key = f"distributed.nanny.pre-spawn-environ.{MALLOC_VAR}"
+    unset: dict[str, Any] = {}
+    if malloc_defaults:
+        unset = {key: None}
+        dask_value = dask.config.get(key, None)
+        if dask_value is not None and os.environ.get(MALLOC_VAR) == str(dask_value):
+            del os.environ[MALLOC_VAR]
     with dask.config.set(unset):
         # a free port: the scheduler's HTTP server (and the dashboard, with bokeh) always runs
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                            env=env, dashboard_address=":0",
                                            silence_logs=40)
     return distributed.Client(cluster), cluster
+
+
+def _malloc_env() -> tuple[str | None, str | None]:
+    return os.environ.get(MALLOC_VAR), os.environ.get(MMAP_VAR)
+
+
+def malloc_note(client: Any) -> str | None:
+    """A note when workers of an existing cluster run with glibc's dynamic mmap threshold
+    switched off (``MALLOC_TRIM_THRESHOLD_`` set, as Dask's nanny does by default, without
+    ``MALLOC_MMAP_THRESHOLD_``), which costs the chain about +50 % CPU; None otherwise.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        Client of the cluster.
+
+    Returns
+    -------
+    str or None
+        One line for stderr.
+    """
+    try:
+        env = client.run(_malloc_env)
+    except Exception:  # noqa: BLE001 - a cluster that refuses client.run gets no note
+        return None
+    n = sum(trim is not None and mmap is None for trim, mmap in env.values())
+    if not n:
+        return None
+    return (f"note: {n} of {len(env)} workers run with {MALLOC_VAR} set and no {MMAP_VAR} "
+            "(Dask's default), which costs the chain about +50 % CPU in page faults; start "
+            f"them without it (see docs/scale-out.md, 'Worker memory settings')")
 
 
 def _has_bokeh() -> bool:
@@ -536,6 +576,9 @@ def cmd_batch(args: argparse.Namespace) -> int:
             f"local cluster of {n_workers} worker(s) x {threads} thread(s)"
         print(f"arrayproc batch: {len(inputs)} inputs on {where}"
               + (f"; dashboard {link}" if link else ""), file=sys.stderr)
+        note = malloc_note(client) if cluster is None else None
+        if note:
+            print(f"arrayproc batch: {note}", file=sys.stderr)
         results = run_batch(inputs, args.chain, args.output, client, args.segment_s,
                             args.resume, args.seed, threads, args.retries,
                             progress=not args.no_progress and sys.stderr.isatty())
