@@ -39,11 +39,19 @@ def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-def td_cost_numpy(pop, tau, elem_x, elem_y, wmeas, w_over_c, ref):
+def td_cost_numpy(pop, tau, elem_x, elem_y, dz2, wmeas, w_over_c, ref, inv_c=0.0):
     """Plain numpy population cost of thesis eq. (3.52) (same arguments as the kernel)."""
     px = pop[0][:, None] + pop[2][:, None] * tau[None, :]
     py = pop[1][:, None] + pop[3][:, None] * tau[None, :]
-    r = np.hypot(px[..., None] - elem_x[None], py[..., None] - elem_y[None])
+    if inv_c > 0:   # source at the emission time (motion eq. M5), as the kernel
+        ax, ay = px, py
+        for _ in range(2):
+            dt = np.sqrt((px - elem_x[None, :, ref]) ** 2 + (py - elem_y[None, :, ref]) ** 2
+                         + dz2[None, :, ref]) * inv_c
+            px = ax - pop[2][:, None] * dt
+            py = ay - pop[3][:, None] * dt
+    r = np.sqrt((px[..., None] - elem_x[None]) ** 2 + (py[..., None] - elem_y[None]) ** 2
+                + dz2[None])
     e = wmeas[None] - w_over_c[None] * (r - r[..., ref:ref + 1])
     return np.einsum("pbn,pbn->p", e, e)
 
@@ -98,7 +106,7 @@ def bench_td(seed: int) -> dict:
     w = np.full(y.shape, 1e4)
     w[:, 0] = 0
     args = (pop, tr.time, np.ascontiguousarray(el[..., 0]), np.ascontiguousarray(el[..., 1]),
-            w * y, w / 1500.0, 0)
+            np.zeros(y.shape), w * y, w / 1500.0, 0)
     n = 20
     t_k = cpu(lambda: [K.td_cost_population(*args) for _ in range(n)])[0] / n
     t_r = cpu(lambda: [td_cost_numpy(*args) for _ in range(n)])[0] / n

@@ -22,6 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .motion import N_RETARD
+
 _PI = np.pi
 _HALF_PI = 0.5 * np.pi
 _SIXTH_PI = np.pi / 6.0
@@ -83,13 +85,15 @@ def atan2_array(y: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 @njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
 def bo_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, meas: np.ndarray,
-                       weight: np.ndarray) -> np.ndarray:
+                       weight: np.ndarray, inv_c: float = 0.0) -> np.ndarray:
     """Bearings-only cost Σ_b (w_b · wrap(θ_b − h_b(x)))² for each state of a population.
 
     thesis eqs. (3.44), (3.47). ``pop`` (4, P) states [x, y, vx, vy] at the window start (m,
     m/s), as scipy's vectorised ``differential_evolution`` passes them; ``tau`` (B,) s since
     the window start; ``obs`` (B, 2) observer position (m); ``meas`` (B,) bearings (rad,
-    clockwise from north); ``weight`` (B,) 1/σ_b (1/rad). Returns (P,).
+    clockwise from north); ``weight`` (B,) 1/σ_b (1/rad); ``inv_c`` 1/c (s/m) to take the
+    source at its emission time (eq. (M5) of :mod:`.motion`, ``N_RETARD`` fixed-point
+    steps), 0 for the thesis's model. Returns (P,).
     """
     n_pop = pop.shape[1]
     out = np.empty(n_pop)
@@ -102,6 +106,13 @@ def bo_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, meas: 
         for b in range(tau.size):
             dx = x0 + vx * tau[b] - obs[b, 0]
             dy = y0 + vy * tau[b] - obs[b, 1]
+            if inv_c > 0.0:
+                ax = dx
+                ay = dy
+                for _ in range(N_RETARD):
+                    dt = np.sqrt(dx * dx + dy * dy) * inv_c
+                    dx = ax - vx * dt
+                    dy = ay - vy * dt
             r = wrap_pi(meas[b] - atan2(dx, dy)) * weight[b]
             s += r * r
         out[p] = s
@@ -110,31 +121,47 @@ def bo_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, meas: 
 
 @njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
 def td_cost_population(pop: np.ndarray, tau: np.ndarray, elem_x: np.ndarray,
-                       elem_y: np.ndarray, wmeas: np.ndarray, w_over_c: np.ndarray,
-                       ref: int) -> np.ndarray:
+                       elem_y: np.ndarray, dz2: np.ndarray, wmeas: np.ndarray,
+                       w_over_c: np.ndarray, ref: int, inv_c: float = 0.0) -> np.ndarray:
     """Time-delay TMA cost Σ_{b,n} (w_bn (τ_bn − h_bn(x)))² for each state of a population.
 
-    thesis eqs. (3.51), (3.52): ``h_bn = (|p_b − e_bn| − |p_b − e_b,ref|) / c`` with
-    ``p_b = (x + vx t_b, y + vy t_b)``. ``pop`` (4, P); ``tau`` (B,) s since the window start;
-    ``elem_x``, ``elem_y`` (B, N) element positions (m, world; contiguous rows, so that the
-    inner loop over hydrophones vectorises); ``wmeas`` (B, N) = w τ with ``w = 1/σ`` (0 for
-    unused entries, e.g. the reference); ``w_over_c`` (B, N) = w / c. Returns (P,).
+    thesis eqs. (3.51), (3.52): ``h_bn = (r_bn − r_b,ref) / c`` with
+    ``r_bn = √(|p_b − e_bn|² + Δz_bn²)`` and ``p_b = (x + vx t_b, y + vy t_b)``, or with
+    ``inv_c = 1/c > 0`` the emission point of eq. (M5) (:mod:`.motion`; receiver the
+    reference element, ``N_RETARD`` fixed-point steps). ``pop`` (4, P); ``tau`` (B,) s since
+    the window start; ``elem_x``, ``elem_y`` (B, N) element positions (m, world; contiguous
+    rows, so that the inner loop over hydrophones vectorises); ``dz2`` (B, N) squared depth
+    differences element − source (m², zeros for the planar model); ``wmeas`` (B, N) = w τ
+    with ``w = 1/σ`` (0 for unused entries, e.g. the reference); ``w_over_c`` (B, N) = w / c.
+    Returns (P,).
     """
     n_pop = pop.shape[1]
     n_b, n_h = wmeas.shape
     out = np.empty(n_pop)
     for p in prange(n_pop):
         s = 0.0
+        vx = pop[2, p]
+        vy = pop[3, p]
         for b in range(n_b):
-            px = pop[0, p] + pop[2, p] * tau[b]
-            py = pop[1, p] + pop[3, p] * tau[b]
+            px = pop[0, p] + vx * tau[b]
+            py = pop[1, p] + vy * tau[b]
             rx = px - elem_x[b, ref]
             ry = py - elem_y[b, ref]
-            r_ref = np.sqrt(rx * rx + ry * ry)
+            if inv_c > 0.0:
+                ax = px
+                ay = py
+                for _ in range(N_RETARD):
+                    dt = np.sqrt(rx * rx + ry * ry + dz2[b, ref]) * inv_c
+                    px = ax - vx * dt
+                    py = ay - vy * dt
+                    rx = px - elem_x[b, ref]
+                    ry = py - elem_y[b, ref]
+            r_ref = np.sqrt(rx * rx + ry * ry + dz2[b, ref])
             for n in range(n_h):
                 dx = px - elem_x[b, n]
                 dy = py - elem_y[b, n]
-                e = wmeas[b, n] - w_over_c[b, n] * (np.sqrt(dx * dx + dy * dy) - r_ref)
+                e = wmeas[b, n] - w_over_c[b, n] * (np.sqrt(dx * dx + dy * dy + dz2[b, n])
+                                                    - r_ref)
                 s += e * e
         out[p] = s
     return out

@@ -11,7 +11,9 @@ bearing sequence (the thesis's simplification of Farina's two-step rejection).
 
 A line array measures a cone angle: the bearing is ``heading − θ`` (port) or ``heading + θ``
 (starboard) (DESIGN section 3). :func:`solve_line_bearings` with ``side="auto"`` solves both
-mirror hypotheses and keeps the cheaper, reporting both costs.
+mirror hypotheses and keeps the cheaper, reporting both costs. A line array moving along its
+axis at speed ``v`` measures the apparent cone angle ``cos θ_app = cos θ / (1 + (v/c) cos θ)``
+(:mod:`.motion`, eq. (M3)); given ``v``, the cone angles are corrected first (eq. (M4)).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from ._kernels import bo_cost_population
 from .fim import bo_fim, bo_jacobian
+from .motion import emission_points, static_cone
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
 
 __all__ = ["reject_outliers", "bearing_model", "solve_bearings", "solve_line_bearings"]
@@ -70,7 +73,8 @@ def reject_outliers(times: np.ndarray, values: np.ndarray, sigma: float | None =
     return keep
 
 
-def bearing_model(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.ndarray:
+def bearing_model(state: np.ndarray, tau: np.ndarray, obs: np.ndarray,
+                  sound_speed: float | None = None) -> np.ndarray:
     """Bearings ``h_b(x)`` (rad, clockwise from north) of thesis eq. (3.44).
 
     Parameters
@@ -81,13 +85,21 @@ def bearing_model(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.nda
         Times since the window start (s).
     obs : (B, 2) array_like
         Observer positions (m).
+    sound_speed : float, optional
+        m/s: the bearing of the source's emission point (eq. (M5) of :mod:`.motion`) rather
+        than of its position at the measurement time (the thesis's model, None).
 
     Returns
     -------
     (B,) ndarray
     """
     x = np.asarray(state, float)
-    d = x[None, :2] + np.asarray(tau, float)[:, None] * x[None, 2:] - np.asarray(obs, float)
+    tau = np.asarray(tau, float)
+    if sound_speed:
+        p = emission_points(x, tau, obs, sound_speed)[0]
+    else:
+        p = x[None, :2] + tau[:, None] * x[None, 2:]
+    d = p - np.asarray(obs, float)
     return np.arctan2(d[:, 0], d[:, 1])
 
 
@@ -105,7 +117,8 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
                    t1: float | None = None, min_range_m: float = 50.0,
                    max_range_m: float = 20000.0, seed: int | np.random.Generator = 0,
                    outliers: bool = True, poly_degree: int = 5, outlier_k: float = 4.0,
-                   popsize: int = 20, maxiter: int = 400) -> TmaSolution:
+                   popsize: int = 20, maxiter: int = 400,
+                   retarded_c: float | None = None) -> TmaSolution:
     """Maximum-likelihood bearings-only TMA (thesis eqs. (3.41)-(3.47)) with its CRLB (3.53).
 
     Parameters
@@ -130,6 +143,9 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
         Polynomial degree and threshold (in σ) of the rejection.
     popsize, maxiter : int
         Differential-evolution settings.
+    retarded_c : float, optional
+        Sound speed (m/s) to model the source at its emission time (eq. (M5) of
+        :mod:`.motion`); None: the thesis's model (3.44).
 
     Returns
     -------
@@ -151,16 +167,19 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
     o1 = _observer_at(t, obs, t1)
     w = np.full(t.size, 1.0 / (sigma_rad if sigma_rad else 1.0))
 
+    cr = float(retarded_c) if retarded_c else None
+    inv_c = 1.0 / cr if cr else 0.0
+
     def res(x: np.ndarray) -> np.ndarray:
-        return w * _wrap(y - bearing_model(x, tau, obs))
+        return w * _wrap(y - bearing_model(x, tau, obs, cr))
 
     def jac(x: np.ndarray) -> np.ndarray:
-        return -w[:, None] * bo_jacobian(x, tau, obs)
+        return -w[:, None] * bo_jacobian(x, tau, obs, cr)
 
     (b0, s0), (b1, s1) = end_value(t, y, t0), end_value(t, y, t1)
     search = PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * s0, 10 * s1), min_range_m,
                          max_range_m, t1 - t0, o0, o1)
-    x = global_then_local(lambda p: bo_cost_population(p, tau, obs, y, w), res, jac,
+    x = global_then_local(lambda p: bo_cost_population(p, tau, obs, y, w, inv_c), res, jac,
                           search.bounds, search.to_state, seed, popsize=popsize,
                           maxiter=maxiter)
     r = res(x)
@@ -168,15 +187,16 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
     sig = sigma_rad if sigma_rad else float(np.sqrt(rss / max(t.size - 4, 1)))
     if not sigma_rad:  # re-weight with the estimated σ
         r, w[:] = r / sig, 1.0 / sig
-    sol = finish_solution("bearings", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig), o0,
-                          bearing_model(x, tau, obs), n_used=t.size, n_rejected=n_rej)
+    sol = finish_solution("bearings", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig, cr), o0,
+                          bearing_model(x, tau, obs, cr), n_used=t.size, n_rejected=n_rej)
     sol.rss = rss
     return sol
 
 
 def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
                         observer_xy: np.ndarray, sigma_rad: float | None = None,
-                        side: str = "auto", **kw: object) -> TmaSolution:
+                        side: str = "auto", axial_speed_mps: np.ndarray | None = None,
+                        sound_speed: float = 1500.0, **kw: object) -> TmaSolution:
     """Bearings-only TMA from a line array's cone angles, resolving the mirror ambiguity.
 
     Parameters
@@ -195,6 +215,12 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
         Mirror hypothesis: bearing ``heading − θ`` (port) or ``heading + θ`` (starboard);
         ``auto`` solves both and keeps the one with the smaller sum of squared residuals
         (the larger likelihood, with σ given or estimated).
+    axial_speed_mps : float or (B,) array_like, optional
+        The array's speed along its axis (forward positive, m/s) at each time; when given,
+        the cone angles are corrected for the array's motion during the wavefront's passage,
+        ``cos θ = cos θ_app / (1 − (v/c) cos θ_app)`` (:mod:`.motion`, eq. (M4)).
+    sound_speed : float
+        m/s (used by the motion correction).
     **kw
         Passed to :func:`solve_bearings`.
 
@@ -207,6 +233,8 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
     if side not in SIDES:
         raise ValueError(f"side must be one of {SIDES}, not {side!r}")
     cone = np.asarray(cone_rad, float)
+    if axial_speed_mps is not None:
+        cone = static_cone(cone, axial_speed_mps, sound_speed)
     hd = np.asarray(heading_rad, float)
     sols = {}
     for s, sign in (("port", -1.0), ("starboard", 1.0)):

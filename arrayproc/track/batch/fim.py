@@ -3,12 +3,16 @@
 - Bearings-only TMA: thesis eq. (3.53) with the Jacobian of appendix C.2 (eqs. (C.8)-(C.11)).
   The bearing ``h_b = atan2(dx, dy)`` has gradient ``[dy/r², −dx/r²]`` in the target position
   (the thesis prints ``r`` for ``r²`` and a stray ``c`` in (C.11); see
-  :mod:`arrayproc.track.crlb`, whose :func:`~arrayproc.track.crlb.bearing_gradient` and
-  :func:`~arrayproc.track.crlb.cv_transition` are used here).
+  :mod:`arrayproc.track.crlb`, whose :func:`~arrayproc.track.crlb.bearing_gradient` is used
+  here); the velocity columns are the position columns times the time since the window start
+  (eq. (3.41)).
 - Time-delay TMA: eq. (3.53) with the Jacobian of appendix C.3 (eqs. (C.12)-(C.15)):
   ``∂h_m/∂(x, y) = (p_b − e_bn)/(c r_bn) − (p_b − e_b,ref)/(c r_b,ref)`` (the thesis's
   (C.15) repeats ``r_y`` in the y row's norm: a misprint), and the velocity rows are the
   position rows times the time since the window start (eq. (3.41)).
+- Both optionally with the source at its emission time (eq. (M5) of :mod:`.motion`: the
+  gradient w.r.t. the emission point times ``M⁻¹``, and the emission time in place of the
+  measurement time), and the delays with a depth difference (ranges ``√(d_h² + Δz²)``).
 - Compact array (compact-array paper eqs. (1)-(4)): parameters ``(x0, y0, γ, v)``; the
   information of the bearings is ``Gᵀ C⁻¹ G`` with the full bearing-error covariance C, the
   speed prior adds ``1/σ_v²`` on v (Bayesian information, Van Trees).
@@ -26,7 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..crlb import bearing_gradient, cv_transition
+from ..crlb import bearing_gradient
+from .motion import emission_derivative, emission_points
 
 __all__ = ["PD_TOL", "bo_jacobian", "td_jacobian", "bo_fim", "td_fim", "compact_jacobian",
            "compact_fim", "crlb_from_fim", "condition_number", "range_sigma",
@@ -38,7 +43,8 @@ __all__ = ["PD_TOL", "bo_jacobian", "td_jacobian", "bo_fim", "td_fim", "compact_
 PD_TOL = 1e-10
 
 
-def bo_jacobian(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.ndarray:
+def bo_jacobian(state: np.ndarray, tau: np.ndarray, obs: np.ndarray,
+                sound_speed: float | None = None) -> np.ndarray:
     """Jacobian of the bearings w.r.t. the initial state (thesis eqs. (C.9)-(C.11)).
 
     Parameters
@@ -49,6 +55,10 @@ def bo_jacobian(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.ndarr
         Measurement times since the window start (s).
     obs : (B, 2) array_like
         Observer position at each measurement (m, x east / y north).
+    sound_speed : float, optional
+        With a sound speed (m/s) the bearing is that of the emission point (eq. (M5) of
+        :mod:`.motion`, exact derivative ``∂p_e/∂x = M⁻¹ [I, τ_e I]``); None: the thesis's
+        model (source at the measurement time).
 
     Returns
     -------
@@ -59,16 +69,39 @@ def bo_jacobian(state: np.ndarray, tau: np.ndarray, obs: np.ndarray) -> np.ndarr
     tau = np.asarray(tau, float)
     obs = np.asarray(obs, float)
     lead = state.shape[:-1]
-    s = state.reshape(-1, 1, 4)
-    pos = s[..., :2] + tau[None, :, None] * s[..., 2:]            # (G, B, 2)
+    s = state.reshape(-1, 4)
+    if sound_speed:
+        pos, tau_e = emission_points(s, tau, obs, sound_speed)              # (G, B, 2)
+        minv = emission_derivative(s, pos, obs, sound_speed)               # (G, B, 2, 2)
+    else:
+        pos = s[:, None, :2] + tau[None, :, None] * s[:, None, 2:]
+        tau_e = np.broadcast_to(tau, pos.shape[:2])
+        minv = None
     g = bearing_gradient(pos.reshape(-1, 2), np.broadcast_to(obs, pos.shape).reshape(-1, 2))
-    phi = cv_transition(tau)                                       # (B, 4, 4)
-    jac = np.einsum("gbi,bij->gbj", g.reshape(pos.shape[0], tau.size, 4), phi)
+    g = g[:, :2].reshape(pos.shape)
+    if minv is not None:
+        g = np.einsum("gbi,gbij->gbj", g, minv)
+    jac = np.concatenate([g, tau_e[..., None] * g], axis=-1)
     return jac.reshape(lead + (tau.size, 4))
 
 
+def _td_geometry(s: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
+                 sound_speed: float, retarded: bool, dz: np.ndarray | None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """Source points (G, B, 2), their times (G, B), M⁻¹ (G, B, 2, 2) or None, and Δz² (B, N)
+    of the delay model (eqs. (3.51), (M5))."""
+    dz2 = np.zeros(elem.shape[:2]) if dz is None else np.asarray(dz, float) ** 2
+    if retarded:
+        pos, tau_e = emission_points(s, tau, elem[:, ref], sound_speed, dz2[:, ref])
+        minv = emission_derivative(s, pos, elem[:, ref], sound_speed, dz2[:, ref])
+        return pos, tau_e, minv, dz2
+    pos = s[:, None, :2] + tau[None, :, None] * s[:, None, 2:]
+    return pos, np.broadcast_to(tau, pos.shape[:2]), None, dz2
+
+
 def td_jacobian(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
-                sound_speed: float) -> np.ndarray:
+                sound_speed: float, retarded: bool = False,
+                dz: np.ndarray | None = None) -> np.ndarray:
     """Jacobian of the delays w.r.t. the initial state (thesis eqs. (C.13)-(C.15)).
 
     Parameters
@@ -83,23 +116,31 @@ def td_jacobian(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
         Index of the reference element.
     sound_speed : float
         m/s.
+    retarded : bool
+        Source at the emission time of what the reference element receives at ``τ_b``
+        (eq. (M5) of :mod:`.motion`, exact derivative); False: the thesis's model.
+    dz : (B, N) array_like, optional
+        Depth differences element − source (m): ranges ``√(d_h² + Δz²)``; None: planar.
 
     Returns
     -------
     (B, N, 4) ndarray
         ``∂h_bn/∂x`` (s/m, s/(m/s)); zero for the reference element.
     """
-    x = np.asarray(state, float).reshape(4)
+    x = np.asarray(state, float).reshape(1, 4)
     tau = np.asarray(tau, float)
     elem = np.asarray(elem, float)
-    p = x[:2][None, :] + tau[:, None] * x[2:][None, :]             # (B, 2)
-    d = p[:, None, :] - elem                                       # (B, N, 2)
-    u = d / (sound_speed * np.linalg.norm(d, axis=-1, keepdims=True))
+    pos, tau_e, minv, dz2 = _td_geometry(x, tau, elem, ref, sound_speed, retarded, dz)
+    d = pos[0][:, None, :] - elem                                  # (B, N, 2)
+    u = d / (sound_speed * np.sqrt(np.sum(d * d, -1) + dz2)[..., None])
     gpos = u - u[:, ref:ref + 1, :]                                # (B, N, 2)
-    return np.concatenate([gpos, tau[:, None, None] * gpos], axis=-1)
+    if minv is not None:
+        gpos = np.einsum("bni,bij->bnj", gpos, minv[0])
+    return np.concatenate([gpos, tau_e[0][:, None, None] * gpos], axis=-1)
 
 
-def bo_fim(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, sigma_rad: float) -> np.ndarray:
+def bo_fim(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, sigma_rad: float,
+           sound_speed: float | None = None) -> np.ndarray:
     """Fisher information of bearings-only TMA, thesis eq. (3.53)/(C.8).
 
     Parameters
@@ -112,19 +153,22 @@ def bo_fim(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, sigma_rad: float
         Observer positions (m).
     sigma_rad : float or (B,) array_like
         Bearing standard deviation (rad).
+    sound_speed : float, optional
+        m/s: the source at its emission time (as :func:`bo_jacobian`).
 
     Returns
     -------
     (..., 4, 4) ndarray
         ``J = Σ_b ∇h_bᵀ ∇h_b / σ_b²`` (units of 1/m², 1/(m·m/s), …).
     """
-    jac = bo_jacobian(state, tau, obs)
+    jac = bo_jacobian(state, tau, obs, sound_speed)
     w = 1.0 / np.broadcast_to(np.asarray(sigma_rad, float), (np.asarray(tau).size,)) ** 2
     return np.einsum("...bi,b,...bj->...ij", jac, w, jac)
 
 
 def td_fim(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int, sound_speed: float,
-           sigma_s: float | np.ndarray) -> np.ndarray:
+           sigma_s: float | np.ndarray, retarded: bool = False,
+           dz: np.ndarray | None = None) -> np.ndarray:
     """Fisher information of time-delay TMA, thesis eq. (3.53)/(C.12).
 
     Parameters
@@ -141,6 +185,8 @@ def td_fim(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int, sound
         m/s.
     sigma_s : float or (B, N) array_like
         Delay standard deviation (s); ``inf`` for a missing delay.
+    retarded, dz : bool, (B, N) array_like
+        As :func:`td_jacobian`.
 
     Returns
     -------
@@ -152,17 +198,20 @@ def td_fim(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int, sound
     w = 1.0 / np.broadcast_to(np.asarray(sigma_s, float), elem.shape[:2]) ** 2
     lead = state.shape[:-1]
     s = state.reshape(-1, 4)
+    pos, tau_e, minv, dz2 = _td_geometry(s, tau, elem, ref, sound_speed, retarded, dz)
     out = np.zeros((s.shape[0], 4, 4))
     for b in range(tau.size):          # accumulate snapshot by snapshot (bounded memory)
-        p = s[:, :2] + tau[b] * s[:, 2:]                           # (G, 2)
-        d = p[:, None, :] - elem[b][None]                          # (G, N, 2)
-        u = d / (sound_speed * np.linalg.norm(d, axis=-1, keepdims=True))
+        d = pos[:, b, None, :] - elem[b][None]                     # (G, N, 2)
+        u = d / (sound_speed * np.sqrt(np.sum(d * d, -1) + dz2[b])[..., None])
         g = u - u[:, ref:ref + 1, :]
+        if minv is not None:
+            g = np.einsum("gni,gij->gnj", g, minv[:, b])
         gg = np.einsum("gni,n,gnj->gij", g, w[b], g)               # (G, 2, 2)
+        tb = tau_e[:, b, None, None]
         out[:, :2, :2] += gg
-        out[:, :2, 2:] += tau[b] * gg
-        out[:, 2:, :2] += tau[b] * gg
-        out[:, 2:, 2:] += tau[b] ** 2 * gg
+        out[:, :2, 2:] += tb * gg
+        out[:, 2:, :2] += tb * gg
+        out[:, 2:, 2:] += tb**2 * gg
     return out.reshape(lead + (4, 4))
 
 

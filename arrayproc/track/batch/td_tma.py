@@ -17,22 +17,29 @@ The global search is bounded around the bearings at the window's two ends (see
 each end has two mirror bearings (``heading ∓ θ``, DESIGN section 3); with ``side = "auto"``
 the choice at each end is a search coordinate (the source may cross the array's axis during
 a manoeuvre), with ``port`` or ``starboard`` it is fixed for both ends.
+
+An array that moves while the wavefront crosses it measures every delay scaled by
+``1/(1 + V·u/c)`` (:mod:`.motion`, eq. (M1)); given the array's velocity, the delays are
+brought back to the static delays the model (3.51) describes, ``τ (1 + V·u/c)`` (eq. (M2)),
+with ``u`` the snapshot's plane-wave direction (for a line array its axial component
+``cos θ`` only: the side is ambiguous, and a towed array moves along its axis).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...geo.tdoa import predicted_delays
 from ._kernels import td_cost_population
 from .fim import td_fim, td_jacobian
+from .motion import axial_speed, emission_points, static_cone, static_delays
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
 
 __all__ = ["delay_model", "plane_wave_directions", "solve_delays"]
 
 
 def delay_model(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
-                sound_speed: float) -> np.ndarray:
+                sound_speed: float, retarded: bool = False,
+                dz: np.ndarray | None = None) -> np.ndarray:
     """Delays ``h_bn(x)`` of thesis eq. (3.51) (s), arrival at element n minus at ``ref``.
 
     Parameters
@@ -47,15 +54,27 @@ def delay_model(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
         Reference element.
     sound_speed : float
         m/s.
+    retarded : bool
+        Source at the emission time of what the reference element receives at ``τ_b``
+        (eq. (M5) of :mod:`.motion`); False: at ``τ_b`` (the thesis's model).
+    dz : (B, N) array_like, optional
+        Depth differences element − source (m): ranges ``√(d_h² + Δz²)``; None: planar.
 
     Returns
     -------
     (B, N) ndarray
     """
     x = np.asarray(state, float)
-    p = x[None, :2] + np.asarray(tau, float)[:, None] * x[None, 2:]
-    return predicted_delays(p[:, None, :], np.asarray(elem, float)[:, None], ref,
-                            sound_speed)[:, 0]
+    tau = np.asarray(tau, float)
+    el = np.asarray(elem, float)[..., :2]
+    dz2 = np.zeros(el.shape[:2]) if dz is None else np.asarray(dz, float) ** 2
+    if retarded:
+        p = emission_points(x, tau, el[:, ref], sound_speed, dz2[:, ref])[0]
+    else:
+        p = x[None, :2] + tau[:, None] * x[None, 2:]
+    d = p[:, None, :] - el
+    r = np.sqrt(np.sum(d * d, -1) + dz2)
+    return (r - r[:, ref:ref + 1]) / sound_speed
 
 
 def plane_wave_directions(delays_s: np.ndarray, elements_xy: np.ndarray, ref: int,
@@ -119,9 +138,10 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
                  sigma_s: float | np.ndarray | None = None, *, ref: int = 0,
                  sound_speed: float = 1500.0, t0: float | None = None, t1: float | None = None,
                  side: str = "auto", heading_rad: np.ndarray | None = None,
-                 min_range_m: float = 50.0, max_range_m: float = 20000.0,
-                 seed: int | np.random.Generator = 0, popsize: int = 20,
-                 maxiter: int = 400) -> TmaSolution:
+                 array_velocity: np.ndarray | None = None, retarded: bool = False,
+                 dz: np.ndarray | None = None, min_range_m: float = 50.0,
+                 max_range_m: float = 20000.0, seed: int | np.random.Generator = 0,
+                 popsize: int = 20, maxiter: int = 400) -> TmaSolution:
     """Maximum-likelihood time-delay TMA (thesis eqs. (3.48)-(3.52)) with its CRLB (C.12).
 
     Parameters
@@ -144,6 +164,15 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
         Mirror bearings searched for a line array (ignored for a 2-D array).
     heading_rad : (B,) array_like, optional
         Array heading at each snapshot (rad), naming the sides.
+    array_velocity : (B, 2) array_like, optional
+        The array's velocity through the water at each snapshot (m/s, east/north); when
+        given, the delays are corrected for the array's motion during the wavefront's passage
+        (:mod:`.motion`, eqs. (M2), (M4)) before the fit.
+    retarded : bool
+        Model the source at its emission time (eq. (M5) of :mod:`.motion`).
+    dz : (B, N) array_like, optional
+        Depth differences element − source (m) for the ranges ``√(d_h² + Δz²)``; None: the
+        planar model.
     min_range_m, max_range_m : float
         Range interval of the global search (m).
     seed : int or Generator
@@ -176,15 +205,29 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     o0 = np.array([np.interp(t0, t, elem[:, ref, 0]), np.interp(t0, t, elem[:, ref, 1])])
     o1 = np.array([np.interp(t1, t, elem[:, ref, 0]), np.interp(t1, t, elem[:, ref, 1])])
 
+    dzb = None if dz is None else np.broadcast_to(np.asarray(dz, float), y.shape)
+    geo = dict(retarded=bool(retarded), dz=dzb)
+
     def res(x: np.ndarray) -> np.ndarray:
-        return (w * (yz - delay_model(x, tau, elem, ref, sound_speed))).ravel()
+        return (w * (yz - delay_model(x, tau, elem, ref, sound_speed, **geo))).ravel()
 
     def jac(x: np.ndarray) -> np.ndarray:
-        return -(w[..., None] * td_jacobian(x, tau, elem, ref, sound_speed)).reshape(-1, 4)
+        return -(w[..., None] * td_jacobian(x, tau, elem, ref, sound_speed, **geo)
+                 ).reshape(-1, 4)
 
     if side not in ("auto", "port", "starboard"):
         raise ValueError(f"side must be auto, port or starboard, not {side!r}")
     pw = plane_wave_directions(np.where(use, y, np.nan), elem, ref, sound_speed, heading_rad)
+    if array_velocity is not None:
+        vel = np.asarray(array_velocity, float).reshape(t.size, 2)
+        if "cone" in pw:
+            v_ax = axial_speed(vel, np.nan_to_num(pw["heading"]))
+            pw["cone"] = static_cone(pw["cone"], v_ax, sound_speed)
+            v_u = v_ax * np.cos(pw["cone"])
+        else:
+            v_u = vel[:, 0] * np.sin(pw["bearing"]) + vel[:, 1] * np.cos(pw["bearing"])
+        y = static_delays(y, np.nan_to_num(v_u), sound_speed)
+        yz = np.where(use, y, 0.0)
     ends = []
     margin = np.deg2rad(2.0)
     for at in (t0, t1):
@@ -202,8 +245,10 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     ey = np.ascontiguousarray(elem[..., 1])
     wm = w * yz
     wc = w / sound_speed
+    dz2 = np.zeros(y.shape) if dzb is None else np.ascontiguousarray(dzb**2)
+    inv_c = 1.0 / sound_speed if retarded else 0.0
     x = global_then_local(
-        lambda p: td_cost_population(p, tau, ex, ey, wm, wc, ref), res, jac,
+        lambda p: td_cost_population(p, tau, ex, ey, dz2, wm, wc, ref, inv_c), res, jac,
         search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
     r = res(x)
     wj = jac(x)
@@ -212,6 +257,6 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
         r, wj, sig_fim = r / s, wj / s, np.where(use, s, np.inf)
     else:
         sig_fim = np.where(use, sig, np.inf)
-    fim = td_fim(x, tau, elem, ref, sound_speed, sig_fim)
+    fim = td_fim(x, tau, elem, ref, sound_speed, sig_fim, **geo)
     return finish_solution("delays", t0, t1, x, r, wj, fim, o0,
-                           delay_model(x, tau, elem, ref, sound_speed), n_used=n_used)
+                           delay_model(x, tau, elem, ref, sound_speed, **geo), n_used=n_used)

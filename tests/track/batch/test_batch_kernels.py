@@ -42,6 +42,11 @@ def test_bo_cost_population_matches_numpy():
     w = rng.uniform(0.5, 2.0, tr.time.size)
     got = K.bo_cost_population(pop, tr.time, tr.position, meas, w)
     np.testing.assert_allclose(got, bo_cost(pop, tr.time, tr.position, meas, w), rtol=1e-12)
+    # source at the emission time (motion eq. M5)
+    got = K.bo_cost_population(pop, tr.time, tr.position, meas, w, 1 / 1500.0)
+    ref = bo_cost(pop, tr.time, tr.position, meas, w, 1500.0)
+    np.testing.assert_allclose(got, ref, rtol=1e-11)
+    assert np.max(np.abs(ref / bo_cost(pop, tr.time, tr.position, meas, w) - 1)) > 1e-6
 
 
 def test_td_cost_population_matches_numpy():
@@ -53,9 +58,16 @@ def test_td_cost_population_matches_numpy():
     meas = rng.normal(0, 1e-3, (tr.time.size, 16))
     w = rng.uniform(0.5, 2.0, meas.shape) * 1e3
     w[:, 3] = 0.0
-    got = K.td_cost_population(pop, tr.time, np.ascontiguousarray(el[..., 0]),
-                               np.ascontiguousarray(el[..., 1]), w * meas, w / 1500.0, 3)
+    ex, ey = np.ascontiguousarray(el[..., 0]), np.ascontiguousarray(el[..., 1])
+    zero = np.zeros(meas.shape)
+    got = K.td_cost_population(pop, tr.time, ex, ey, zero, w * meas, w / 1500.0, 3)
     np.testing.assert_allclose(got, td_cost(pop, tr.time, el, meas, w, 3, 1500.0), rtol=1e-10)
+    # depth differences and the source at the emission time (motion eq. M5)
+    dz2 = rng.uniform(0.0, 60.0, meas.shape) ** 2
+    got = K.td_cost_population(pop, tr.time, ex, ey, dz2, w * meas, w / 1500.0, 3, 1 / 1500.0)
+    ref = td_cost(pop, tr.time, el, meas, w, 3, 1500.0, dz2, retarded=True)
+    np.testing.assert_allclose(got, ref, rtol=1e-10)
+    assert np.max(np.abs(ref / td_cost(pop, tr.time, el, meas, w, 3, 1500.0) - 1)) > 1e-6
 
 
 def test_innovations_equal_dense_quadratic_form():

@@ -9,9 +9,8 @@ from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording, RecordingWriter
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.bo_tma import bearing_model
+from arrayproc.track.batch.motion import axial_speed, nav_velocity
 from arrayproc.track.batch.run import load_tma_config, run_tma
-from arrayproc.track.batch.td_tma import delay_model
 
 N_H, DX = 16, 0.75
 TRUTH = np.array([2000.0, 1000.0, 0.0, 3.0])
@@ -26,23 +25,50 @@ def _recording(path, tr):
     return path
 
 
-def _setup(tmp_path, seed=0, sig_deg=0.05, sig_tau=2e-5):
+def _emission_lag(p_rx, v, obs, c=1500.0):
+    """s = t_rx − t_e > 0 from |p_rx − v s − o| = c s (closed form, a quadratic in s)."""
+    g = p_rx - obs
+    a = v @ v - c * c
+    b = -2.0 * (g @ v)
+    return (-b - np.sqrt(b * b - 4 * a * (g @ g))) / (2 * a)
+
+
+def _setup(tmp_path, seed=0, sig_deg=0.05, sig_tau=2e-5, c=1500.0):
+    """Products as a moving towed array measures them: bearings of the source's emission
+    point with the apparent cone of eq. (M3); delays from the exact arrival times of the
+    emission the reference receives at each snapshot time at elements moving with the nav
+    velocity (each a quadratic light-cone equation)."""
     tr = S.turn_track(dt=10.0)
     # nav: the heading changes at the turn; sample finely so that interpolation is exact
     fine = S.turn_track(dt=1.0)
     rec = _recording(tmp_path / "rec.h5", fine)
     with Recording(rec) as r:
         poses = r.poses(tr.time)
+        vel = nav_velocity(r.nav, tr.time)
     el = np.stack([p.elements[:, :2] for p in poses])
     centre = el.mean(1)
-    rng = np.random.default_rng(seed)
-    brg = bearing_model(TRUTH, tr.time, centre) + rng.normal(0, np.deg2rad(sig_deg),
-                                                             tr.time.size)
     hd = np.deg2rad([p.heading for p in poses])
+    src = TRUTH[2:]
+    brg = np.empty(tr.time.size)
+    tau = np.zeros((tr.time.size, N_H))
+    for b, t in enumerate(tr.time):
+        p_rx = TRUTH[:2] + src * t
+        s_c = _emission_lag(p_rx, src, centre[b], c)
+        d = p_rx - src * s_c - centre[b]
+        brg[b] = np.arctan2(d[0], d[1])
+        t0 = _emission_lag(p_rx, src, el[b, 0], c)
+        q = el[b] - (p_rx - src * t0)
+        qa = vel[b] @ vel[b] - c * c
+        qb = 2 * (q @ vel[b] - c * c * t0)
+        qc = np.sum(q * q, 1) - (c * t0) ** 2
+        tau[b] = (-qb - np.sqrt(qb * qb - 4 * qa * qc)) / (2 * qa)
     rel = (brg - hd + np.pi) % (2 * np.pi) - np.pi
-    cone = np.abs(rel)
-    tau = delay_model(TRUTH, tr.time, el, 0, 1500.0) + rng.normal(0, sig_tau, (tr.time.size,
-                                                                              N_H))
+    ct = np.cos(np.abs(rel))
+    v_ax = axial_speed(vel, hd)
+    rng = np.random.default_rng(seed)
+    cone = np.arccos(ct / (1 + v_ax / c * ct)) + rng.normal(0, np.deg2rad(sig_deg),
+                                                             tr.time.size)
+    tau += rng.normal(0, sig_tau, tau.shape)
     tau[:, 0] = 0.0
     prod = tmp_path / "prod.h5"
     with ProductsWriter(prod, source=str(rec)) as w:
@@ -83,6 +109,24 @@ def test_run_bearings_and_delays_within_3_sigma(tmp_path):
         assert g["heading_deg"][0] == pytest.approx(np.degrees(np.arctan2(est[2], est[3])) % 360)
         if method == "bearings":
             assert sols[0].side == "starboard" and g["cost_mirror"][0] > 10 * g["cost"][0]
+
+
+def test_motion_corrections_make_the_difference(tmp_path):
+    """Precise measurements of a moving array (σ 0.002°, 0.3 µs): with the array's motion (M3,
+    M1) and the source's emission time (M5) modelled, `tma` finds the truth within 3σ of the
+    CRLB; with both switched off (the thesis's models) it is 60-75 m off (more than 5σ)."""
+    prod, _ = _setup(tmp_path, seed=1, sig_deg=0.002, sig_tau=3e-7)
+    worst = {}
+    for method, extra in (("bearings", "sigma_bearing_deg = 0.002\n"), ("delays", "")):
+        for on in (True, False):
+            flags = f"array_motion = {str(on).lower()}\nretarded_time = {str(on).lower()}\n"
+            cfg = _cfg(tmp_path, f'method = "{method}"\n' + extra + flags, f"{method}{on}.toml")
+            sol = run_tma(str(prod), cfg, str(tmp_path / f"{method}{on}.h5"))[0]
+            z = (sol.state - TRUTH) / np.sqrt(np.diag(sol.crlb))
+            worst[method, on] = float(np.max(np.abs(z)))
+    for method in ("bearings", "delays"):
+        assert worst[method, True] < 3.0, worst
+        assert worst[method, False] > 5.0, worst
 
 
 def test_run_windows(tmp_path):
