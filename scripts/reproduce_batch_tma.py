@@ -10,6 +10,11 @@ Targets (issue 15): TD-TMA within 15 % of its CRLB, BO-TMA within 30 %.
 
 Usage:
   python scripts/reproduce_batch_tma.py --runs N [--seed 1] [--json OUT] [--plot DIR]
+      [--workers N | --scheduler ADDRESS] [--chunk 10]
+
+Without --workers/--scheduler the runs go one after the other here (the numbers of
+docs/validation/batch_tma.md); with them, chunks of --chunk runs on Dask, each chunk seeded
+from SeedSequence(seed): the same numbers on any number of workers (docs/scale-out.md).
 """
 
 from __future__ import annotations
@@ -23,9 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.bo_tma import bearing_model, solve_bearings
 from arrayproc.track.batch.fim import bo_fim, crlb_from_fim, td_fim
-from arrayproc.track.batch.td_tma import delay_model, solve_delays
 
 SIGMA_TAU = 1e-4                    # s (thesis 3.3.3.1)
 SIGMA_THETA = np.deg2rad(0.0306)    # rad (thesis 3.3.3.1, from app. C.1)
@@ -39,33 +42,36 @@ def c6_sigma_theta(theta_deg: float = 90.0) -> float:
     return float(np.rad2deg(1 / np.sqrt(j)))
 
 
-def run(runs: int, seed: int) -> dict:
+def run(runs: int, seed: int, client=None, chunk: int = 10) -> dict:
+    """Fig. 3.19's Monte Carlo: here, run i seeded as before (one generator for every run's
+    errors, solvers seeded ``seed * 100003 + i``); on a Dask client, chunks of ``chunk`` runs,
+    chunk k drawing from ``SeedSequence(seed).spawn(n_chunks)[k]``
+    (:func:`arrayproc.evaluate.distributed.spread`): the same numbers on any number of
+    workers, not the same as here."""
+    from arrayproc.evaluate.distributed import spread, tma_chunk
     tr = S.turn_track()
     el = S.line_elements(tr, N_H, DX)
     x = S.FIG_3_18_SOURCE
-    hb = bearing_model(x, tr.time, tr.position)
-    hd = delay_model(x, tr.time, el, 0, C)
     crlb_b = crlb_from_fim(bo_fim(x, tr.time, tr.position, SIGMA_THETA))[0]
     crlb_d = crlb_from_fim(td_fim(x, tr.time, el, 0, C, SIGMA_TAU))[0]
-    rng = np.random.default_rng(seed)
-    err = {"bearings": [], "delays": []}
-    t_solve = {"bearings": 0.0, "delays": 0.0}
-    for i in range(runs):
-        yb = hb + rng.normal(0, SIGMA_THETA, hb.shape)
-        yd = hd + rng.normal(0, SIGMA_TAU, hd.shape)
-        t0 = time.perf_counter()
-        sb = solve_bearings(tr.time, yb, tr.position, SIGMA_THETA, seed=seed * 100003 + i)
-        t1 = time.perf_counter()
-        sd = solve_delays(tr.time, yd, el, SIGMA_TAU, sound_speed=C, heading_rad=tr.heading,
-                          seed=seed * 100003 + i)
-        t2 = time.perf_counter()
-        t_solve["bearings"] += t1 - t0
-        t_solve["delays"] += t2 - t1
-        err["bearings"].append(sb.state - x)
-        err["delays"].append(sd.state - x)
-        if (i + 1) % 10 == 0:
-            print(f"  run {i + 1}/{runs}", file=sys.stderr, flush=True)
-    out: dict = {"runs": runs, "seed": seed, "scenario": {
+    scenario = dict(times=tr.time, observer_pos=tr.position, elements_xy=el,
+                    heading_rad=tr.heading, state=x, sigma_theta_rad=SIGMA_THETA,
+                    sigma_tau_s=SIGMA_TAU, sound_speed=C)
+
+    def log(done: int) -> None:
+        if done % 10 == 0:
+            print(f"  run {done}/{runs}", file=sys.stderr, flush=True)
+
+    if client is None:
+        parts = [tma_chunk(runs, seed, **scenario, log=log,
+                           seeds=[seed * 100003 + i for i in range(runs)])]
+    else:
+        parts = spread(tma_chunk, runs, seed, client, chunk, **scenario)
+    err = {m: np.concatenate([p[m] for p in parts]) for m in ("bearings", "delays")}
+    t_solve = {m: float(sum(p[f"seconds_{m}"] for p in parts)) for m in ("bearings", "delays")}
+    out: dict = {"runs": runs, "seed": seed,
+                 "seeding": "one generator" if client is None else f"chunks of {chunk}",
+                 "scenario": {
         "source_state": x.tolist(), "n_hydrophones": N_H, "spacing_m": DX,
         "sigma_tau_s": SIGMA_TAU, "sigma_theta_deg": float(np.rad2deg(SIGMA_THETA)),
         "c6_sigma_theta_broadside_deg": c6_sigma_theta(), "snapshots": int(tr.time.size),
@@ -139,15 +145,35 @@ def plot(res: dict, outdir: Path) -> None:
     plt.close(fig)
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", default=None, help="write the numbers to this JSON file")
     ap.add_argument("--plot", default=None, help="directory for the PNG figures")
-    a = ap.parse_args()
+    ap.add_argument("--workers", type=int, default=None,
+                    help="spread the runs over a local Dask cluster of N workers "
+                         "(docs/scale-out.md: chunks of --chunk runs, each seeded from "
+                         "SeedSequence(seed); numbers independent of N)")
+    ap.add_argument("--scheduler", default=None, help="an existing Dask scheduler instead")
+    ap.add_argument("--chunk", type=int, default=10, help="runs per Dask task")
+    a = ap.parse_args(argv)
+    if a.runs < 2 or a.chunk < 1 or (a.workers is not None and a.workers < 1):
+        print("reproduce_batch_tma: --runs must be >= 2, --chunk and --workers >= 1",
+              file=sys.stderr)
+        return 2
+    client = cluster = None
+    if a.workers or a.scheduler:
+        from arrayproc.app.batch import start_client
+        client, cluster = start_client(a.workers, a.scheduler)
     t = time.perf_counter()
-    res = run(a.runs, a.seed)
+    try:
+        res = run(a.runs, a.seed, client, a.chunk)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
     res["wall_s"] = time.perf_counter() - t
     for m in ("bearings", "delays"):
         r = res[m]
