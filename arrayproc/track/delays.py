@@ -28,15 +28,22 @@ delays are left out (the track coasts through such a row).
 Initialisation (from the first usable row): the plane-wave direction that fits the row's
 delays best (least squares, :func:`arrayproc.track.batch.td_tma.plane_wave_directions`) and a
 range prior ``range_m ± sigma_range_m`` along it (Ristic, Arulampalam & Gordon 2003, ch. 6:
-the polar prior linearised into x, y); the bearing σ is the larger of ``sigma_bearing_deg`` and
-the fit's own σ (c σ_τ / ‖projected apertures‖ / sin θ). CV: velocity 0 ± ``sigma_speed_mps``
-per axis. A line array's delays give a cone angle, the same for two mirror bearings
-(heading ∓ θ); ``side = "auto"`` runs both as hypotheses weighted by their likelihoods (L-R
-paper eqs. (9)-(11)), ``port`` / ``starboard`` keeps one. The written track is the heavier
-hypothesis (its state and covariance; ``side_weight`` is the starboard weight), not the
-mixture of eq. (12), whose mean lies between the mirrors, on the array's axis, until an
-ownship turn tells them apart. Optional gating (``gate_prob`` > 0): a row whose normalised
-innovation exceeds the χ² quantile for every hypothesis is skipped.
+the polar prior linearised into x, y), or with ``range_bank = [r_min, r_max, n]`` a bank of
+n such priors at ranges spaced geometrically from r_min to r_max, each σ_r = r (ρ − 1)/2 with
+ρ the ratio of neighbouring ranges (the range-parameterised filter bank, Peach 1995; Ristic
+et al. 2003, ch. 6), run as hypotheses weighted by their likelihoods. One wide Gaussian prior
+lets an EKF's first update, linearised far from a near source, throw the state across the
+array (measured: 405 km off for a 2 km source with 6 ± 4 km). The bearing σ is the larger of
+``sigma_bearing_deg`` and the fit's own σ (c σ_τ / ‖projected apertures‖ / sin θ). CV:
+velocity 0 ± ``sigma_speed_mps`` per axis. A line array's delays give a cone angle, the same
+for two mirror bearings (heading ∓ θ); ``side = "auto"`` runs both as hypotheses weighted by
+their likelihoods (L-R paper eqs. (9)-(11)), ``port`` / ``starboard`` keeps one. The written
+track is the mixture (eqs. (12)-(13)) of the hypotheses on the heavier side only
+(``side_weight`` is the summed weight of the starboard hypotheses): a mixture over both sides
+would put its mean between the mirrors, on the array's axis, until an ownship turn tells
+them apart. Hypotheses whose
+weight falls below 1e-9 are dropped. Optional gating (``gate_prob`` > 0): a row whose
+normalised innovation exceeds the χ² quantile for every hypothesis is skipped.
 
 Config (``arrayproc track DELAYS.h5 -c TRACKER.toml``)::
 
@@ -51,6 +58,8 @@ Config (``arrayproc track DELAYS.h5 -c TRACKER.toml``)::
     q = 0.0                   # static: m²/s; cv: m²/s³
     range_m = 5000.0          # initial range prior
     sigma_range_m = 3000.0
+    range_bank = [1000.0, 20000.0, 6]  # optional: n priors from r_min to r_max (replaces
+                              # range_m, sigma_range_m)
     sigma_bearing_deg = 0.5   # lower bound of the initial bearing σ
     sigma_speed_mps = 3.0     # cv: initial velocity σ per axis
     side = "auto"             # auto | port | starboard (line arrays)
@@ -98,8 +107,9 @@ GAUSSIAN_FILTERS = ("ekf", "ukf", "ckf", "ghf")
 DELAYS_DEFAULTS: dict[str, Any] = {
     "motion": "static", "q": 0.0, "range_m": 5000.0, "sigma_range_m": 3000.0,
     "sigma_bearing_deg": 0.5, "sigma_speed_mps": 3.0, "side": "auto", "sigma_delay_s": 0.0,
-    "min_corr": 0.0, "source_dz_m": 0.0, "gate_prob": 0.0, "group": "",
+    "min_corr": 0.0, "source_dz_m": 0.0, "gate_prob": 0.0, "group": "", "range_bank": None,
 }
+_PRUNE = math.log(1e-9)
 _TOP_KEYS = {"mode", "measurements", "filter", "nav", "params", "delays"}
 
 
@@ -220,6 +230,14 @@ def load_delays_config(path: str) -> dict[str, Any]:
                 raise ConfigError(f"{path}: tracker.delays.{k} must be "
                                   f"{' | '.join(choices.get(k, ('a group name',)))}, not {v!r}")
             d[k] = v
+        elif k == "range_bank":
+            if (not isinstance(v, list) or len(v) != 3
+                    or not all(isinstance(a, (int, float)) and not isinstance(a, bool)
+                               and math.isfinite(a) for a in v)
+                    or not 0 < v[0] < v[1] or not isinstance(v[2], int) or v[2] < 2):
+                raise ConfigError(f"{path}: tracker.delays.range_bank must be [r_min, r_max, n]"
+                                  " with 0 < r_min < r_max (m) and an integer n >= 2")
+            d[k] = [float(v[0]), float(v[1]), int(v[2])]
         elif k == "source_dz_m":
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ConfigError(f"{path}: tracker.delays.source_dz_m must be a number")
@@ -274,7 +292,8 @@ def initial_hypotheses(tau: np.ndarray, sigma: np.ndarray, elements: np.ndarray,
     Returns
     -------
     states : list of GaussianState
-        One per hypothesis (two mirrors for a line array with ``side = "auto"``).
+        One per hypothesis: per side (two mirrors for a line array with ``side = "auto"``)
+        one per range of the bank (or the one range prior).
     sides : list of str
         ``"port"``, ``"starboard"`` or ``""`` (2-D array), per hypothesis.
     """
@@ -304,22 +323,49 @@ def initial_hypotheses(tau: np.ndarray, sigma: np.ndarray, elements: np.ndarray,
     if not all(math.isfinite(b) for b in beta):
         raise FormatError("delays: the first usable row gives no plane-wave direction")
     s_b = max(math.radians(d["sigma_bearing_deg"]), s_fit)
-    r, sr = float(d["range_m"]), float(d["sigma_range_m"])
+    if d.get("range_bank"):
+        r0, r1, nb = d["range_bank"]
+        rho = (r1 / r0) ** (1.0 / (nb - 1))
+        ranges = r0 * rho ** np.arange(nb)
+        sig_r = ranges * (rho - 1.0) / 2.0
+    else:
+        ranges, sig_r = np.array([float(d["range_m"])]), np.array([float(d["sigma_range_m"])])
     cv = d["motion"] == "cv"
-    out = []
-    for b in beta:
+    out, names = [], []
+    for b, side in zip(beta, sides, strict=True):
         u = np.array([math.sin(b), math.cos(b)])
         v = np.array([math.cos(b), -math.sin(b)])
-        Pxy = sr * sr * np.outer(u, u) + (r * s_b) ** 2 * np.outer(v, v)
-        if cv:
-            x = np.r_[r * u, -np.asarray(own_vel, float)[:2]]
-            P = np.zeros((4, 4))
-            P[:2, :2] = Pxy
-            P[2:, 2:] = d["sigma_speed_mps"] ** 2 * np.eye(2)
-        else:
-            x, P = r * u, Pxy
-        out.append(GaussianState(x, P))
-    return out, sides
+        for r, sr in zip(ranges, sig_r, strict=True):
+            Pxy = sr * sr * np.outer(u, u) + (r * s_b) ** 2 * np.outer(v, v)
+            if cv:
+                x = np.r_[r * u, -np.asarray(own_vel, float)[:2]]
+                P = np.zeros((4, 4))
+                P[:2, :2] = Pxy
+                P[2:, 2:] = d["sigma_speed_mps"] ** 2 * np.eye(2)
+            else:
+                x, P = r * u, Pxy
+            out.append(GaussianState(x, P))
+            names.append(side)
+    return out, names
+
+
+def _estimate(states: list[GaussianState], logw: np.ndarray, alive: np.ndarray,
+               stbd: np.ndarray, mirrored: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The written estimate: the mixture (L-R paper eqs. (12)-(13)) of the live hypotheses on
+    the heavier side; the two sides are not mixed (their mean would lie on the array's axis)."""
+    on = alive.copy()
+    if mirrored:
+        w_s = float(np.exp(logw[alive & stbd]).sum())
+        on &= stbd if w_s >= 0.5 else ~stbd
+    lw = np.where(on, logw, -np.inf)
+    lw = lw - lw.max()
+    lw -= math.log(np.exp(lw).sum())
+    X = np.ascontiguousarray([st.x for st in states])
+    P = np.ascontiguousarray([st.P for st in states])
+    x = np.empty(X.shape[1])
+    Pc = np.empty((X.shape[1], X.shape[1]))
+    kl.lr_combine(X, P, lw, on, x, Pc, np.empty(X.shape[0]))
+    return x, Pc
 
 
 def observer_states(times: np.ndarray, ref_xy: np.ndarray) -> np.ndarray:
@@ -374,8 +420,8 @@ def track_delays(times: np.ndarray, tau: np.ndarray, sigma: np.ndarray | None,
         ``cov`` (n, 4, 4) (static: velocity block 0), ``rel`` (n, 2) the position relative to
         the reference hydrophone, ``P`` (n, d, d) the state covariance, ``own`` (n, 4),
         ``side_weight`` (n,) the starboard hypothesis's weight (NaN without mirrors),
-        ``updated`` (n,) bool (False: coasted), ``n_delays`` (n,) the delays used, and
-        ``side`` the hypotheses' names.
+        ``updated`` (n,) bool (False: coasted), ``n_delays`` (n,) the delays used,
+        ``side`` the sides searched and ``n_hypotheses``.
 
     Raises
     ------
@@ -430,7 +476,8 @@ def track_delays(times: np.ndarray, tau: np.ndarray, sigma: np.ndarray | None,
     sw = np.full(n, np.nan)
     upd = np.zeros(n, bool)
     nd = np.zeros(n, np.int64)
-    stbd = sides.index("starboard") if "starboard" in sides and nh > 1 else -1
+    stbd = np.array([sd == "starboard" for sd in sides])
+    mirrored = len(set(sides)) > 1
     for i, k in enumerate(range(k0, B)):
         dt = 0.0 if k == k0 else t[k] - t[k - 1]
         ctx = Context(own[k], own[k if k == k0 else k - 1],
@@ -477,10 +524,14 @@ def track_delays(times: np.ndarray, tau: np.ndarray, sigma: np.ndarray | None,
             states = preds
         if not kl.lr_normalise(logw, alive):
             raise FilterDivergence("delays tracker: every hypothesis diverged")
-        best = int(np.argmax(np.where(alive, logw, -np.inf)))
-        X[i], P[i] = states[best].x, states[best].P
-        if stbd >= 0:
-            sw[i] = math.exp(logw[stbd]) if alive[stbd] else 0.0
+        X[i], P[i] = _estimate(states, logw, alive, stbd, mirrored)
+        if mirrored:
+            sw[i] = float(np.exp(logw[alive & stbd]).sum())
+        if nh > 1:
+            drop = alive & (logw < _PRUNE)
+            if drop.any():
+                alive &= ~drop
+                logw[drop] = -np.inf
     rows = np.arange(k0, B)
     o = own[rows]
     cov = np.zeros((n, 4, 4))
@@ -493,7 +544,7 @@ def track_delays(times: np.ndarray, tau: np.ndarray, sigma: np.ndarray | None,
     return {"time": t[rows], "row": rows, "x": X[:, 0] + o[:, 0], "y": X[:, 1] + o[:, 1],
             "vx": vel[:, 0], "vy": vel[:, 1], "cov": cov, "rel": X[:, :2].copy(), "P": P,
             "own": o, "side_weight": sw, "updated": upd, "n_delays": nd,
-            "side": np.array(sides)}
+            "side": np.array(list(dict.fromkeys(sides))), "n_hypotheses": nh}
 
 
 # ----------------------------------------------------------------------------- runner

@@ -127,6 +127,34 @@ def test_static_nees_is_consistent_in_a_seeded_monte_carlo():
     assert np.allclose(np.cov(dd.T), R, atol=0.5 * sig**2)
 
 
+def test_range_bank_keeps_the_ekf_on_a_near_source():
+    """One wide prior (6 ± 4 km) for a source 1.2 km away: the EKF's first update, linearised
+    at 6 km, leaves the source km away; the range-parameterised bank (priors from 1 to 20 km)
+    converges, and its initial members are the geometric ranges with σ_r = r (ρ − 1)/2."""
+    tr, el = _geometry()
+    near = el[0, 0, :2] + 1200.0 * np.array([math.sin(1.2), math.cos(1.2)])
+    tau = _delays(el, near)
+    d = {"motion": "static", "range_m": 6000.0, "sigma_range_m": 4000.0,
+         "sigma_delay_s": 2e-6}
+    one = track_delays(tr.time, tau, None, el, 0, C, d, "ekf", heading_rad=tr.heading)
+    bank = {**d, "range_bank": [1000.0, 20000.0, 6]}
+    r = track_delays(tr.time, tau, None, el, 0, C, bank, "ekf", heading_rad=tr.heading)
+    e_one = np.hypot(one["x"][-1] - near[0], one["y"][-1] - near[1])
+    e_bank = np.hypot(r["x"] - near[0], r["y"] - near[1])
+    assert e_bank[-1] < 0.5 and e_one > 100.0
+    assert r["n_hypotheses"] == 12 and list(r["side"]) == ["port", "starboard"]
+    assert r["side_weight"][-1] > 0.999
+    states, sides = initial_hypotheses(tau[0], np.full(N_H, 2e-6), el[0] - el[0, 0], 0, C,
+                                       float(tr.heading[0]), np.zeros(2),
+                                       {**bank, "sigma_bearing_deg": 0.5, "side": "auto"})
+    rho = 20.0 ** (1 / 5)
+    rng = np.array([np.hypot(*st.x) for st in states])
+    assert np.allclose(rng, np.tile(1000.0 * rho ** np.arange(6), 2))
+    assert sides == ["port"] * 6 + ["starboard"] * 6
+    u = states[9].x / rng[9]
+    assert u @ states[9].P @ u == pytest.approx((rng[9] * (rho - 1) / 2) ** 2)
+
+
 def test_cv_option_tracks_a_moving_source():
     tr, el = _geometry(dt=5.0)
     state = np.array([2000.0, 1000.0, 0.0, 3.0])             # thesis fig. 3.18 source
@@ -184,6 +212,9 @@ def test_config_errors(tmp_path):
                       ('[tracker.delays]\nrange_m = 0\n', "range_m must be"),
                       ('[tracker.delays]\ngate_prob = 1.0\n', "gate_prob must be < 1"),
                       ('[tracker.delays]\nfoo = 1\n', "unknown key tracker.delays.foo"),
+                      ('[tracker.delays]\nrange_bank = [5000.0, 1000.0, 4]\n', "range_bank"),
+                      ('[tracker.delays]\nrange_bank = [500.0, 1000.0, 1.5]\n',
+                       "range_bank"),
                       ('[tracker.params]\nalpha = "x"\n', "tracker.params")):
         with pytest.raises(ConfigError, match=msg):
             load_tracker_config(_toml(tmp_path, body))
