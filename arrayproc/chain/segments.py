@@ -7,12 +7,14 @@ from ``t_start − margin`` to ``t_stop + margin`` and its products writer keeps
 ``time`` falls in the segment, so the segments' rows partition the single run's rows.
 
 Bit-exactness. Stages that frame their input on the stream's absolute sample grid (``cbf``
-frames start at multiples of ``hop``; ``integrate`` groups snapshots at multiples of N_B)
-compute every kept row from the same samples in the same order wherever the read starts, so
-their rows are equal bit for bit. A stage whose frames are laid from the first sample read
-(an overlap-save filter) computes the same values only up to rounding unless every read
-starts on its frame grid; such a stage may declare the grid with a method
-``segment_grid(fs, n_channels) -> int`` (input samples), and :func:`plan_segments` puts every
+frames start at multiples of ``hop``; ``integrate`` groups snapshots at multiples of N_B;
+``dft_filter``'s overlap-save frames start at multiples of its output block M, less half a
+filter) compute every kept row from the same samples in the same order wherever the read
+starts, so their rows are equal bit for bit, provided the warm-up margin covers a whole
+frame (a frame partly before the read sees zeros there, and its rounding differs). A stage
+whose frames are laid from the first sample read computes the same values only up to
+rounding unless every read starts on its frame grid; such a stage may declare the grid with a
+method ``segment_grid(fs, n_channels) -> int`` (input samples), and :func:`plan_segments` puts every
 segment's read start on the least common multiple of the declared grids (each taken at the
 recording rate). Stages without the method are assumed to need no alignment.
 """

@@ -9,6 +9,10 @@ chosen so that the realised response meets the specification below) and applied 
 overlap-save: frames of N samples overlap by the filter length, so the output is exactly the
 linear convolution ``(x * h)(p)`` sampled at every ``decimate``-th input sample, whatever the
 block boundaries. The first and last samples of a stream see zeros beyond the stream's ends.
+The frames lie on the absolute sample grid (frame k gives the outputs ``k·M`` to ``k·M + M −
+1``, M = N − 2·half), wherever the stream starts, so an output's rounding does not depend on
+where the read began: a segment of a recording read from any sample gives the single run's
+output bit for bit from one warm-up (``warmup_seconds``: one frame less half a filter) on.
 
 Response (``band = [lo, hi]`` Hz, ``taper`` = Tukey α): a Tukey window spanning [lo, hi] as in
 the thesis, flat over ``[lo + α(hi−lo)/2, hi − α(hi−lo)/2]`` with raised-cosine transitions
@@ -142,11 +146,7 @@ class DFTFilter(Stage):
         self.report = rep
         self._half_r = -(-half // d) * d
         hr = self._half_r
-        # Frames of ~8 filter half-lengths (3/4 of each transform is new output), but a
-        # complex frame of all channels within ~8 MB: measured here with 64 channels, 13824-
-        # point frames ran at 67x real time per CPU second, 27648-point ones at 9x.
-        target = min(8 * hr, max(4 * hr, (8 << 20) // (8 * max(1, n_ch))))
-        n = d * fft.next_fast_len(-(-max(target, 2 * hr + 1024) // d))
+        n = self._frame_len(n_ch)
         self._n, self._m = n, n - 2 * hr
         buf = np.zeros(n, complex)
         buf[np.arange(-half, half + 1) % n] = taps
@@ -166,6 +166,15 @@ class DFTFilter(Stage):
             self._h = np.fft.rfft(buf.real).astype(np.complex64)
         self.taps = taps
         self._fs = fs
+
+    def _frame_len(self, n_ch: int) -> int:
+        """Overlap-save frame length N for ``n_ch`` channels (after :meth:`_setup`)."""
+        hr, d = self._half_r, self.decimate
+        # Frames of ~8 filter half-lengths (3/4 of each transform is new output), but a
+        # complex frame of all channels within ~8 MB: measured here with 64 channels, 13824-
+        # point frames ran at 67x real time per CPU second, 27648-point ones at 9x.
+        target = min(8 * hr, max(4 * hr, (8 << 20) // (8 * max(1, n_ch))))
+        return d * fft.next_fast_len(-(-max(target, 2 * hr + 1024) // d))
 
     def _plans(self, n_ch: int):
         """This stage's forward/inverse FFT plans over (N, C) frames (reused buffers)."""
@@ -199,6 +208,7 @@ class DFTFilter(Stage):
         buf: np.ndarray | None = None
         buf_start = 0  # absolute input sample of buf[0]
         end = 0  # one past the last real input sample
+        skip = 0  # outputs of the next frame before the stream's (or gap's) first sample
         last: Block | None = None
         index = 0
 
@@ -222,17 +232,22 @@ class DFTFilter(Stage):
             s0 = b.meta.sample0
             x = b.data[:n_valid]
             if buf is None or buf_start + buf.shape[0] != s0:  # first block or a gap
+                # frames on the absolute grid: frame k holds samples [k·M − half_r, k·M +
+                # M + half_r) and gives the outputs k·M + j·D, wherever the stream starts;
+                # zeros stand for the samples before s0, and outputs before s0 are dropped
                 origin = -(-s0 // self.decimate) * self.decimate
-                buf_start = origin - self._half_r
+                buf_start = (s0 // self._m) * self._m - self._half_r
+                skip = (origin - buf_start - self._half_r) // self.decimate
                 buf = np.zeros((s0 - buf_start, x.shape[1]), np.float32)
             buf = np.concatenate([buf, x.astype(np.float32, copy=False)])
             end = s0 + n_valid
             last = b
             ys, first = [], None
             while buf.shape[0] >= self._n:
-                ys.append(self._frame(buf[: self._n], buf_start))
+                ys.append(self._frame(buf[: self._n], buf_start)[skip:])
                 if first is None:
-                    first = buf_start + self._half_r
+                    first = buf_start + self._half_r + skip * self.decimate
+                skip = 0
                 buf = buf[self._m:]
                 buf_start += self._m
             if ys:
@@ -245,11 +260,12 @@ class DFTFilter(Stage):
         while buf_start + self._half_r < end:  # flush: zeros past the stream's end
             pad = np.zeros((self._n - buf.shape[0], buf.shape[1]), np.float32)
             frame = np.concatenate([buf, pad]) if pad.shape[0] > 0 else buf[: self._n]
-            y = self._frame(frame, buf_start)
-            pos = buf_start + self._half_r + self.decimate * np.arange(y.shape[0])
+            y = self._frame(frame, buf_start)[skip:]
+            pos = buf_start + self._half_r + self.decimate * (skip + np.arange(y.shape[0]))
             ys.append(y[pos < end])
             if first is None:
-                first = buf_start + self._half_r
+                first = buf_start + self._half_r + skip * self.decimate
+            skip = 0
             buf = buf[self._m:] if buf.shape[0] > self._m else buf[:0]
             buf_start += self._m
         if ys and sum(y.shape[0] for y in ys):
@@ -259,6 +275,10 @@ class DFTFilter(Stage):
         return fs / self.decimate
 
     def warmup_seconds(self, fs: float) -> float:
+        """One frame less half a filter, ``(M + half_r) / fs`` for the longest frame (one
+        channel): an output at least that far inside a read comes from a frame that lies
+        wholly inside it; frames sit on the absolute grid, so that frame and its rounding are
+        the single run's, and segments of the stream are bit for bit equal to it."""
         if self._fs != fs:
             self._setup(fs)
-        return 2.0 * self._half_r / fs
+        return (self._frame_len(1) - self._half_r) / fs
