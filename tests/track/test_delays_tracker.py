@@ -44,6 +44,19 @@ def _delays(el, source_xy, src_depth=50.0):
     return np.stack([predicted_delays(s[b], el[b], 0, C) for b in range(el.shape[0])])
 
 
+def _velocity(tr, speed=3.0):
+    """The ownship's (and array's) velocity along its heading, (B, 2) m/s."""
+    return speed * np.stack([np.sin(tr.heading), np.cos(tr.heading)], -1)
+
+
+def _moving(tau, el, source_xy, vel):
+    """Delays a moving array measures, τ / (1 + V·u/c) (batch/motion.py eq. (M1)), u the
+    unit vector from the reference element to the source."""
+    d = np.broadcast_to(source_xy, el[:, 0, :2].shape) - el[:, 0, :2]
+    u = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return tau / (1.0 + np.einsum("bi,bi->b", vel, u) / C)[:, None]
+
+
 def test_static_model_is_eq_3_40_in_relative_coordinates():
     m = StaticPosition(q=2.0)
     ctx = Context(np.array([10.0, 20.0, 1.0, 0.0]), np.array([4.0, 5.0, 1.0, 0.0]))
@@ -155,6 +168,21 @@ def test_range_bank_keeps_the_ekf_on_a_near_source():
     assert u @ states[9].P @ u == pytest.approx((rng[9] * (rho - 1) / 2) ** 2)
 
 
+def test_array_motion_correction_removes_the_moving_array_bias():
+    """Delays of the moving array (eq. (M1)): uncorrected they bias the static estimate by
+    metres (the cone angle moves by (v/c) cos θ cot θ); corrected (M2, M4) the estimate
+    converges to the source as with a static array's delays."""
+    tr, el = _geometry()
+    tau = _moving(_delays(el, SOURCE), el, SOURCE, _velocity(tr))
+    d = {"motion": "static", "range_bank": [1000.0, 20000.0, 6], "sigma_delay_s": 2e-6}
+    raw = track_delays(tr.time, tau, None, el, 0, C, d, "ukf", heading_rad=tr.heading)
+    cor = track_delays(tr.time, tau, None, el, 0, C, d, "ukf", heading_rad=tr.heading,
+                       array_velocity=_velocity(tr))
+    e_raw = np.hypot(raw["x"][-1] - SOURCE[0], raw["y"][-1] - SOURCE[1])
+    e_cor = np.hypot(cor["x"][-1] - SOURCE[0], cor["y"][-1] - SOURCE[1])
+    assert e_cor < 0.3 and e_raw > 10 * e_cor
+
+
 def test_cv_option_tracks_a_moving_source():
     tr, el = _geometry(dt=5.0)
     state = np.array([2000.0, 1000.0, 0.0, 3.0])             # thesis fig. 3.18 source
@@ -234,7 +262,10 @@ def test_arrayproc_track_on_delays_products(tmp_path):
         w.append(np.zeros((10, N_H), np.float32))
         w.set_nav(fine.time, fine.position, np.rad2deg(fine.heading) % 360.0)
     tr, el = _geometry()
-    tau = _delays(el, SOURCE, src_depth=0.0)   # the recording's array is at depth 0
+    # the recording's array is at depth 0; the delays a moving array measures (M1), which
+    # the tracker corrects by default (array_motion = true, velocity from /nav)
+    el[..., 2] = 0.0
+    tau = _moving(_delays(el, SOURCE, src_depth=0.0), el, SOURCE, _velocity(tr))
     order = np.r_[np.arange(1, tr.time.size), 0]
     prod = tmp_path / "del.h5"
     with ProductsWriter(prod, source=str(rec)) as w:
@@ -248,7 +279,8 @@ def test_arrayproc_track_on_delays_products(tmp_path):
     assert g["kind"] == "tracks" and g["attrs"]["measurements"] == "delays"
     assert np.all(g["track_id"] == 1) and np.all(np.diff(g["time"]) > 0)
     assert g["row"][0] == order.size - 1       # the products row of the first time
-    assert np.hypot(g["x"][-1] - SOURCE[0], g["y"][-1] - SOURCE[1]) < 2.0
+    assert np.hypot(g["x"][-1] - SOURCE[0], g["y"][-1] - SOURCE[1]) < 0.2
+    assert g["attrs"]["array_motion"]
     assert np.allclose(g["own_x"], el[:, 0, 0], atol=1e-6)
     assert g["cov"].shape == (tr.time.size, 4, 4)
     with pytest.raises(FormatError, match="channels"):
