@@ -46,7 +46,7 @@ Config (``[tracker]`` keys beside those of single mode)::
     q = 0.01                      # m²/s³
     sigma_speed_mps = 5.0         # unobserved tangential speed at initiation
     mirror = true
-    initiate_moving = false       # start tracks only from contacts flagged moving
+    moving_only = false           # only contacts flagged moving enter (still clutter never does)
     [tracker.positions]
     q = 0.01
     sigma_speed_mps = 5.0
@@ -83,7 +83,7 @@ _SUB = {
                 "q_bearing": 0.002, "turn_ref_deg_s": 0.1, "merge_deg": 4.0,
                 "sigma_rate_deg_s": 0.5, "merge_d2": 4.0, "min_sigma_sin": 0.2},
     "contacts": {"sigma_bearing_deg": 2.0, "sigma_range_m": 20.0, "sigma_range_rate_mps": 0.3,
-                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True, "initiate_moving": False},
+                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True, "moving_only": False},
     "positions": {"q": 0.01, "sigma_speed_mps": 5.0},
 }
 
@@ -388,7 +388,8 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
 
 # ----------------------------------------------------------------------------- contacts
 
-def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool, sound_speed: float = 1500.0
+def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool, sound_speed: float = 1500.0,
+                  keep: np.ndarray | None = None
                   ) -> list[tuple[float, np.ndarray, np.ndarray, np.ndarray]]:
     """Scans of contacts: Z (m, 3) [bearing rad, range m, range rate m/s], products rows (m,),
     and the ownship state (4,). With ``mirror`` a contact whose port and starboard bearings
@@ -414,6 +415,10 @@ def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool, sound_speed:
         Enter both candidate bearings of a line array's contact.
     sound_speed : float
         c (m/s) for the travel times of ping-grouped contacts.
+    keep : ndarray of bool, optional
+        Rows that enter as measurements (e.g. those flagged ``moving``); every row still
+        defines its scan and its time, so a ping without a kept row is an empty scan (a miss
+        for every track).
 
     Returns
     -------
@@ -442,33 +447,45 @@ def contact_scans(c: dict[str, np.ndarray], nav: Nav, mirror: bool, sound_speed:
         own, _ = ownship_states(nav, np.array([ts]))
         zs, rows = [], []
         for k, i in enumerate(seg):
+            if keep is not None and not keep[i]:
+                continue
             bp, bs = c["bearing_port_deg"][i], c["bearing_stbd_deg"][i]
             sides = [bs] if (not mirror or abs(((bp - bs + 180) % 360) - 180) < 1e-6) \
                 else [bp, bs]
             for bb in sides:
                 zs.append([math.radians(bb), rng[k], rdot[k]])
                 rows.append(i)
-        out.append((ts, np.array(zs), np.array(rows, np.int64), own[0]))
+        out.append((ts, np.array(zs, float).reshape(-1, 3), np.array(rows, np.int64),
+                    own[0]))
     return out
 
 
-def contacts_manager(cfg: dict[str, Any],
-                     may_start: dict[float, np.ndarray] | None = None) -> TrackManager:
-    """Track manager for contacts: EKF with the bearing-range-range-rate model.
+def drop_twin_births(tracks: list[Track], n_before: int, t: float, rows: np.ndarray) -> None:
+    """Remove, in place, the tracks born in the scan at ``t`` (``tracks[n_before:]``) from a
+    measurement whose twin — the other candidate bearing of the same contact, i.e. the same
+    products row — updated a track in that scan: the echo is already explained, and its
+    mirror image would start a ghost on the far side of a line array after every turn.
 
     Parameters
     ----------
-    cfg : dict
-        Settings of :func:`split_config`.
-    may_start : dict, optional
-        Scan time -> boolean mask (m,) of the measurements allowed to start a tentative
-        track (e.g. the contacts flagged ``moving``, ``initiate_moving``); every other
-        measurement may still update a track. None: all may.
-
-    Returns
-    -------
-    TrackManager
+    tracks : list of Track
+        The manager's tracks after the scan.
+    n_before : int
+        Number of tracks before the scan.
+    t : float
+        Scan time (s).
+    rows : ndarray (m,)
+        Products row of each measurement of the scan.
     """
+    used = {int(rows[tr.history[-1].meas]) for tr in tracks[:n_before]
+            if tr.history and tr.history[-1].time == t and tr.history[-1].meas >= 0}
+    if used:
+        tracks[n_before:] = [tr for tr in tracks[n_before:]
+                             if int(rows[tr.history[0].meas]) not in used]
+
+
+def contacts_manager(cfg: dict[str, Any]) -> TrackManager:
+    """Track manager for contacts: EKF with the bearing-range-range-rate model."""
     from arrayproc.track.models.bearing_range_rate import BearingRangeRate
 
     cc = cfg["contacts"]
@@ -477,10 +494,7 @@ def contacts_manager(cfg: dict[str, Any],
     filt = EKFBatch(ConstantVelocity(2, float(cc["q"])), model)
     sv = float(cc["sigma_speed_mps"])
 
-    def init(Z: np.ndarray, t: float, own: Any, j: int
-             ) -> tuple[np.ndarray, np.ndarray] | None:
-        if may_start is not None and not may_start[t][j]:
-            return None
+    def init(Z: np.ndarray, t: float, own: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
         return model.inverse(Z[j], own, sv)
 
     return TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
@@ -600,18 +614,19 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
                          "range_rate_mps"), products_path)
         if "ping" in g:
             c["ping"] = np.asarray(g["ping"], np.int64)
-        scans = contact_scans(c, nav, bool(cfg["contacts"]["mirror"]),
-                              _sound_speed(products_path))
-        may_start = None
-        if cfg["contacts"]["initiate_moving"]:
+        keep = None
+        if cfg["contacts"]["moving_only"]:
             if "moving" not in g:
-                raise FormatError(f"{products_path}: tracker.contacts.initiate_moving needs "
-                                  "the contacts' 'moving' column")
-            moving = np.asarray(g["moving"], bool)
-            may_start = {t: moving[r] for t, _Z, r, _o in scans}
-        mgr = contacts_manager(cfg, may_start)
-        for t, Z, _rows, own in scans:
+                raise FormatError(f"{products_path}: tracker.contacts.moving_only needs the "
+                                  "contacts' 'moving' column")
+            keep = np.asarray(g["moving"], bool)
+        scans = contact_scans(c, nav, bool(cfg["contacts"]["mirror"]),
+                              _sound_speed(products_path), keep)
+        mgr = contacts_manager(cfg)
+        for t, Z, r, own in scans:
+            n0 = len(mgr.tracks)
             mgr.step(t, Z, own)
+            drop_twin_births(mgr.tracks, n0, t, r)
         _attach_rows(mgr.tracks, [(t, r) for t, _Z, r, _o in scans])
         return mgr.tracks, [_cartesian_rows(tr, nav, 2) for tr in mgr.tracks]
     g = _group(prod, "positions", products_path)
@@ -687,6 +702,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
         g = w.group("tracks", "tracks", stage="track", mode="multi",
                     measurements=cfg["measurements"], association=cfg["association"],
                     filter=tma_cfg["filter"], lr=bool(tma_cfg["lr"]))
+        parts = []
         for tr, r in zip(tracks, rows, strict=True):
             n = r["time"].size
             if n == 0:
@@ -695,7 +711,9 @@ def run_multi(products_path: str, config_path: str, out_path: str,
             cols["track_id"] = np.full(n, tr.id, np.int64)
             cols["status"] = np.array([STATUS_CODES[str(s)] for s in cols["status"]],
                                       np.int8)
-            g.append(**cols)
+            parts.append(cols)
+        if parts:  # one append: thousands of one-row tentative tracks are common (contacts)
+            g.append(**{k: np.concatenate([c[k] for c in parts]) for k in parts[0]})
         if not any(r["time"].size for r in rows):
             g.attrs["empty"] = True
 
@@ -706,5 +724,5 @@ def confirmed_status(status: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["run_multi", "tracker_mode", "split_config", "multi_target", "bearing_scans",
-           "track_cones", "tma_track", "contact_scans", "contacts_manager",
+           "track_cones", "tma_track", "contact_scans", "contacts_manager", "drop_twin_births",
            "positions_manager", "confirmed_status"]
