@@ -216,3 +216,62 @@ def compact_grid_cost(xs: np.ndarray, ys: np.ndarray, headings: np.ndarray, spee
             for j in range(n_j):
                 out[i, j, k] = acc[j]
     return out
+
+
+@njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
+def td_model_jacobian(state: np.ndarray, tau: np.ndarray, elem_x: np.ndarray,
+                      elem_y: np.ndarray, dz2: np.ndarray, ref: int, sound_speed: float,
+                      retarded: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Delays ``h_bn(x)`` (thesis eq. (3.51)) and their Jacobian (eqs. (C.13)-(C.15)) at one
+    state, in one pass (the least-squares polish and the FIM of time-delay TMA).
+
+    ``state`` (4,) [x, y, vx, vy] at the window start; ``tau`` (B,) s; ``elem_x``, ``elem_y``
+    (B, N) element positions (m); ``dz2`` (B, N) squared depth differences (m², zeros for
+    the planar model); ``ref`` the reference element; ``retarded``: the source at its
+    emission time (eq. (M5) of :mod:`.motion`, ``N_RETARD`` fixed-point steps, exact
+    derivative ``M⁻¹ [I, τ_e I]``, ``M⁻¹ = I − v ûᵀ/(c + û·v)``). Returns ``h`` (B, N) s and
+    ``∂h/∂x`` (B, N, 4); the numpy twins are ``td_tma.delay_model`` and
+    ``fim.td_jacobian``.
+    """
+    n_b, n_h = elem_x.shape
+    h = np.empty((n_b, n_h))
+    jac = np.empty((n_b, n_h, 4))
+    x0, y0, vx, vy = state[0], state[1], state[2], state[3]
+    c = sound_speed
+    for b in prange(n_b):
+        tb = tau[b]
+        px = x0 + vx * tb
+        py = y0 + vy * tb
+        rx = px - elem_x[b, ref]
+        ry = py - elem_y[b, ref]
+        if retarded:
+            for _ in range(N_RETARD):
+                tb = tau[b] - np.sqrt(rx * rx + ry * ry + dz2[b, ref]) / c
+                px = x0 + vx * tb
+                py = y0 + vy * tb
+                rx = px - elem_x[b, ref]
+                ry = py - elem_y[b, ref]
+        r_ref = np.sqrt(rx * rx + ry * ry + dz2[b, ref])
+        ux = rx / r_ref
+        uy = ry / r_ref
+        m00, m01, m10, m11 = 1.0, 0.0, 0.0, 1.0
+        if retarded:
+            den = c + ux * vx + uy * vy
+            m00 = 1.0 - vx * ux / den
+            m01 = -vx * uy / den
+            m10 = -vy * ux / den
+            m11 = 1.0 - vy * uy / den
+        for n in range(n_h):
+            dx = px - elem_x[b, n]
+            dy = py - elem_y[b, n]
+            r = np.sqrt(dx * dx + dy * dy + dz2[b, n])
+            h[b, n] = (r - r_ref) / c
+            gx = (dx / r - ux) / c
+            gy = (dy / r - uy) / c
+            jx = gx * m00 + gy * m10
+            jy = gx * m01 + gy * m11
+            jac[b, n, 0] = jx
+            jac[b, n, 1] = jy
+            jac[b, n, 2] = tb * jx
+            jac[b, n, 3] = tb * jy
+    return h, jac

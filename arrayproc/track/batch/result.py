@@ -64,6 +64,8 @@ class TmaSolution:
         Model values at the estimate for the measurements used (rad or s).
     rss : float
         Unweighted sum of squared residuals (rad² or s²), NaN when not computed.
+    correlation : float
+        Within-snapshot correlation of the delays used (``delays``; NaN otherwise).
     """
 
     t0: float
@@ -82,6 +84,7 @@ class TmaSolution:
     observer: np.ndarray = field(default_factory=lambda: np.zeros(2))
     fitted: np.ndarray = field(default_factory=lambda: np.zeros(0))
     rss: float = float("nan")
+    correlation: float = float("nan")
 
     @property
     def heading_deg(self) -> float:

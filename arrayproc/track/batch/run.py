@@ -36,6 +36,7 @@ Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (e
     array_motion = true        # bearings/delays: correct for the array's motion (below)
     retarded_time = true       # bearings/delays: the source at its emission time (below)
     source_depth_m = 10.0      # delays: ranges in 3-D with this source depth (default: planar)
+    delay_correlation = 0.35   # delays: within-snapshot correlation (default: estimated)
 
 The observer of a bearing is the array's phase centre (mean element position) at its time;
 the delays use every element's world position in each snapshot's pose (``Recording.poses``).
@@ -63,6 +64,12 @@ of 32 or more hydrophones' delays.
 array geometry), so a known source depth turns the ranges of eq. (3.51) into 3-D ranges
 ``√(d_h² + Δz²)``; without it the model is planar (Δz = 0). The bearings method is planar
 (its cone angles are slightly narrower than the horizontal ones when Δz ≠ 0).
+
+``delay_correlation`` (delays): the delays of one snapshot share the reference hydrophone's
+noise, so they are correlated (ρ = ½ for equal noise); the likelihood and the FIM use the
+compound-symmetric covariance of eq. (D1) (:mod:`.td_tma`). Absent: ρ estimated from the
+residuals of an independent-error fit; 0: the thesis's independent errors. The ρ used is
+stored in the group attribute ``delay_correlation`` (one value per window).
 """
 
 from __future__ import annotations
@@ -91,6 +98,10 @@ __all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements"]
 
 def _non_negative(v: Any) -> str | None:
     return None if v >= 0 else f"must be >= 0, got {v}"
+
+
+def _unit_interval(v: Any) -> str | None:
+    return None if 0 <= v < 1 else f"must be in [0, 1), got {v}"
 
 
 def _gate(v: Any) -> str | None:
@@ -129,6 +140,8 @@ PARAMS: dict[str, Param] = {
                            "time"),
     "source_depth_m": Param("float", None, "delays: source depth (m) for 3-D ranges; absent: "
                             "planar model", check=_non_negative),
+    "delay_correlation": Param("float", None, "delays: within-snapshot correlation in [0, 1); "
+                               "absent: estimated", check=_unit_interval),
 }
 
 
@@ -304,6 +317,7 @@ def _solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) -
                             array_velocity=(nav_velocity(rec.nav, ts) if cfg["array_motion"]
                                             else None),
                             retarded=cfg["retarded_time"],
+                            correlation=cfg["delay_correlation"],
                             dz=(None if cfg["source_depth_m"] is None else
                                 np.stack([p.elements[:, 2] for p in poses])
                                 - cfg["source_depth_m"]),
@@ -397,7 +411,8 @@ def run_tma(products_path: str, config_path: str, output_path: str,
                     products=os.path.abspath(products_path), recording=rec_path,
                     side=",".join(s.side for s in sols),
                     sigma_bearing_deg=cfg["sigma_bearing_deg"],
-                    sigma_delay_s=cfg["sigma_delay_s"])
+                    sigma_delay_s=cfg["sigma_delay_s"],
+                    delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols))
         g.append(
             t0=np.array([s.t0 for s in sols]), t1=np.array([s.t1 for s in sols]),
             method=np.array([s.method.encode() for s in sols], dtype="S8"),

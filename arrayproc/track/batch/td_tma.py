@@ -23,18 +23,37 @@ An array that moves while the wavefront crosses it measures every delay scaled b
 brought back to the static delays the model (3.51) describes, ``τ (1 + V·u/c)`` (eq. (M2)),
 with ``u`` the snapshot's plane-wave direction (for a line array its axial component
 ``cos θ`` only: the side is ambiguous, and a towed array moves along its axis).
+
+Correlated delay errors: every delay of a snapshot is measured against the same reference
+hydrophone (generalised cross-correlation, eq. (3.48)), so the reference's noise is common to
+all of them: ``τ_n = (t_n + ε_n) − (t_ref + ε_ref)`` has the within-snapshot correlation
+``ρ = σ_ref² / (σ_n² + σ_ref²)`` (½ for equal noise; 0.35 measured on the simulated towed
+recording, docs/validation/batch_tma.md). The thesis's likelihood (3.52) takes the delays as
+independent; with ``correlation = ρ`` the covariance of a snapshot's delays becomes
+``C_b = S((1 − ρ) I + ρ 11ᵀ)S`` (``S`` the σ's), whose inverse is closed-form,
+
+    C_b⁻¹ = S⁻¹ (I − γ_b 11ᵀ) S⁻¹ / (1 − ρ),   γ_b = ρ / (1 − ρ + n_b ρ)               (D1)
+
+(``n_b`` the delays used in the snapshot), so the weighted residuals and Jacobian are
+whitened per snapshot by ``L_b = (I − β_b 11ᵀ)/√(1 − ρ)``, ``β_b = (1 − √(1 − n_b γ_b))/n_b``
+(``L_bᵀ L_b = C_b⁻¹``), and the FIM (3.53) becomes ``Σ_b G_bᵀ C_b⁻¹ G_b``. With
+``correlation = None`` ρ is estimated from the residuals of the independent-error fit,
+``ρ̂ = Σ_b [(Σ_n r)² − Σ_n r²] / Σ_b (n_b − 1) Σ_n r²`` (r the σ-normalised residuals), and
+the solution is polished again with it. The global search keeps the independent-error cost
+(its minimum lies within a few σ of the correlated one).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from ._kernels import td_cost_population
-from .fim import td_fim, td_jacobian
+from ._kernels import td_cost_population, td_model_jacobian
 from .motion import axial_speed, emission_points, static_cone, static_delays
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
 
-__all__ = ["delay_model", "plane_wave_directions", "solve_delays"]
+__all__ = ["delay_model", "plane_wave_directions", "solve_delays", "estimate_correlation",
+           "SnapshotWhitening"]
 
 
 def delay_model(state: np.ndarray, tau: np.ndarray, elem: np.ndarray, ref: int,
@@ -109,29 +128,25 @@ def plane_wave_directions(delays_s: np.ndarray, elements_xy: np.ndarray, ref: in
     d0 = el[0] - el[0, ref]
     sv = np.linalg.svd(d0 - d0.mean(0), compute_uv=False)
     line = sv.size < 2 or sv[1] <= 1e-6 * max(sv[0], 1e-300)
-    val = np.full(n_b, np.nan)
-    hd = np.full(n_b, np.nan)
-    far = n_h - 1 if ref != n_h - 1 else 0
-    for b in range(n_b):
-        ok = np.isfinite(y[b])
-        ok[ref] = False
-        if ok.sum() < 2:
-            continue
-        d = el[b, ok] - el[b, ref]
-        rhs = -sound_speed * y[b, ok]
-        if not line:
-            u = np.linalg.lstsq(d, rhs, rcond=None)[0]
-            val[b] = np.arctan2(u[0], u[1])
-            continue
+    ok = np.isfinite(y)
+    ok[:, ref] = False
+    enough = ok.sum(1) >= 2
+    d = np.where(ok[..., None], el - el[:, ref:ref + 1], 0.0)            # (B, N, 2)
+    rhs = np.where(ok, -sound_speed * np.where(ok, y, 0.0), 0.0)          # (B, N)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if not line:   # least squares d·u = −c τ per snapshot (2 × 2 normal equations)
+            a = np.einsum("bni,bnj->bij", d, d)
+            u = np.einsum("bij,bj->bi", np.linalg.pinv(a), np.einsum("bni,bn->bi", d, rhs))
+            return {"bearing": np.where(enough, np.arctan2(u[:, 0], u[:, 1]), np.nan)}
         if heading_rad is not None:
-            hd[b] = float(np.asarray(heading_rad, float).reshape(-1)[b])
+            hd = np.asarray(heading_rad, float).reshape(-1).copy()
         else:
-            a = el[b, ref] - el[b, far]
-            hd[b] = np.arctan2(a[0], a[1])
-        a = np.array([np.sin(hd[b]), np.cos(hd[b])])
-        da = d @ a
-        val[b] = np.arccos(np.clip(np.dot(da, rhs) / np.dot(da, da), -1.0, 1.0))
-    return {"cone": val, "heading": hd} if line else {"bearing": val}
+            far = n_h - 1 if ref != n_h - 1 else 0
+            ax = el[:, ref] - el[:, far]
+            hd = np.arctan2(ax[:, 0], ax[:, 1])
+        da = d[..., 0] * np.sin(hd)[:, None] + d[..., 1] * np.cos(hd)[:, None]
+        cone = np.arccos(np.clip(np.sum(da * rhs, 1) / np.sum(da * da, 1), -1.0, 1.0))
+    return {"cone": np.where(enough, cone, np.nan), "heading": np.where(enough, hd, np.nan)}
 
 
 def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarray,
@@ -139,7 +154,8 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
                  sound_speed: float = 1500.0, t0: float | None = None, t1: float | None = None,
                  side: str = "auto", heading_rad: np.ndarray | None = None,
                  array_velocity: np.ndarray | None = None, retarded: bool = False,
-                 dz: np.ndarray | None = None, min_range_m: float = 50.0,
+                 dz: np.ndarray | None = None, correlation: float | None = 0.0,
+                 min_range_m: float = 50.0,
                  max_range_m: float = 20000.0, seed: int | np.random.Generator = 0,
                  popsize: int = 20, maxiter: int = 400) -> TmaSolution:
     """Maximum-likelihood time-delay TMA (thesis eqs. (3.48)-(3.52)) with its CRLB (C.12).
@@ -173,6 +189,9 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     dz : (B, N) array_like, optional
         Depth differences element − source (m) for the ranges ``√(d_h² + Δz²)``; None: the
         planar model.
+    correlation : float or None
+        Correlation ρ in [0, 1) of the delays of one snapshot (common reference, eq. (D1));
+        0: independent errors (the thesis's model); None: estimated from the residuals.
     min_range_m, max_range_m : float
         Range interval of the global search (m).
     seed : int or Generator
@@ -183,7 +202,8 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     Returns
     -------
     TmaSolution
-        ``method = "delays"``; ``fitted`` holds the model delays (B, N) (s).
+        ``method = "delays"``; ``fitted`` holds the model delays (B, N) (s);
+        ``correlation`` the ρ used.
     """
     t = np.asarray(times, float).reshape(-1)
     y = np.asarray(delays_s, float)
@@ -206,14 +226,25 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     o1 = np.array([np.interp(t1, t, elem[:, ref, 0]), np.interp(t1, t, elem[:, ref, 1])])
 
     dzb = None if dz is None else np.broadcast_to(np.asarray(dz, float), y.shape)
-    geo = dict(retarded=bool(retarded), dz=dzb)
+
+    ex = np.ascontiguousarray(elem[..., 0])
+    ey = np.ascontiguousarray(elem[..., 1])
+    dz2 = np.zeros(y.shape) if dzb is None else np.ascontiguousarray(dzb**2)
+    last: dict[str, np.ndarray] = {}
+
+    def model(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(h, ∂h/∂x) at x, kept for the Jacobian call that follows the residual call."""
+        if "x" not in last or not np.array_equal(last["x"], x):
+            last["x"] = np.array(x, float)
+            last["h"], last["j"] = td_model_jacobian(last["x"], tau, ex, ey, dz2, ref,
+                                                     sound_speed, bool(retarded))
+        return last["h"], last["j"]
 
     def res(x: np.ndarray) -> np.ndarray:
-        return (w * (yz - delay_model(x, tau, elem, ref, sound_speed, **geo))).ravel()
+        return (w * (yz - model(x)[0])).ravel()
 
     def jac(x: np.ndarray) -> np.ndarray:
-        return -(w[..., None] * td_jacobian(x, tau, elem, ref, sound_speed, **geo)
-                 ).reshape(-1, 4)
+        return -(w[..., None] * model(x)[1]).reshape(-1, 4)
 
     if side not in ("auto", "port", "starboard"):
         raise ValueError(f"side must be auto, port or starboard, not {side!r}")
@@ -241,22 +272,84 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
             ends.append(np.array([cands[side]] if side != "auto" else list(cands.values())))
         margin = max(margin, 10 * sc)
     search = PolarSearch(ends[0], ends[1], margin, min_range_m, max_range_m, t1 - t0, o0, o1)
-    ex = np.ascontiguousarray(elem[..., 0])
-    ey = np.ascontiguousarray(elem[..., 1])
     wm = w * yz
     wc = w / sound_speed
-    dz2 = np.zeros(y.shape) if dzb is None else np.ascontiguousarray(dzb**2)
     inv_c = 1.0 / sound_speed if retarded else 0.0
     x = global_then_local(
         lambda p: td_cost_population(p, tau, ex, ey, dz2, wm, wc, ref, inv_c), res, jac,
         search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
-    r = res(x)
-    wj = jac(x)
+    rho = 0.0 if correlation is None else float(correlation)
+    if not 0.0 <= rho < 1.0:
+        raise ValueError(f"correlation must be in [0, 1), not {rho}")
+    if correlation is None:
+        rho = estimate_correlation(res(x).reshape(y.shape), use)
+    if rho > 0.0:
+        white = SnapshotWhitening(use, rho)
+        x = least_squares(lambda q: white(res(q).reshape(y.shape)).ravel(), x,
+                          jac=lambda q: white(jac(q).reshape(y.shape + (4,))).reshape(-1, 4),
+                          method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                          max_nfev=200).x
+        r = white(res(x).reshape(y.shape)).ravel()
+        wj = white(jac(x).reshape(y.shape + (4,))).reshape(-1, 4)
+    else:
+        r = res(x)
+        wj = jac(x)
     if sigma_s is None:  # one σ for all delays, from the residuals
         s = float(np.sqrt(np.sum(r**2) / max(n_used - 4, 1)))
-        r, wj, sig_fim = r / s, wj / s, np.where(use, s, np.inf)
-    else:
-        sig_fim = np.where(use, sig, np.inf)
-    fim = td_fim(x, tau, elem, ref, sound_speed, sig_fim, **geo)
-    return finish_solution("delays", t0, t1, x, r, wj, fim, o0,
-                           delay_model(x, tau, elem, ref, sound_speed, **geo), n_used=n_used)
+        r, wj = r / s, wj / s
+    # eq. (3.53): the whitened Jacobian's Gram matrix, Σ_b G_bᵀ C_b⁻¹ G_b
+    fim = wj.T @ wj
+    sol = finish_solution("delays", t0, t1, x, r, wj, fim, o0, model(x)[0].copy(),
+                          n_used=n_used)
+    sol.correlation = rho
+    return sol
+
+
+def estimate_correlation(resid: np.ndarray, use: np.ndarray) -> float:
+    """Within-snapshot correlation of σ-normalised delay residuals (see the module docstring).
+
+    Parameters
+    ----------
+    resid : (B, N) array_like
+        Residuals divided by their σ (0 where unused).
+    use : (B, N) bool array_like
+        Delays used.
+
+    Returns
+    -------
+    float
+        ``ρ̂ = Σ_b [(Σ_n r)² − Σ_n r²] / Σ_b (n_b − 1) Σ_n r²``, clipped to [0, 0.95].
+    """
+    r = np.where(use, resid, 0.0)
+    n = np.asarray(use).sum(1)
+    s1, s2 = r.sum(1), (r * r).sum(1)
+    den = float(np.sum((n - 1) * s2))
+    return float(np.clip(np.sum(s1 * s1 - s2) / den, 0.0, 0.95)) if den > 0 else 0.0
+
+
+class SnapshotWhitening:
+    """``L_b = (I − β_b 11ᵀ)/√(1 − ρ)`` over the used delays of each snapshot (eq. (D1)).
+
+    Parameters
+    ----------
+    use : (B, N) bool array_like
+        Delays used (the others stay 0).
+    rho : float
+        Within-snapshot correlation, [0, 1).
+    """
+
+    def __init__(self, use: np.ndarray, rho: float) -> None:
+        self.m = np.asarray(use, float)
+        n = self.m.sum(1)
+        gamma = rho / (1.0 - rho + n * rho)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            beta = np.where(n > 0, (1.0 - np.sqrt(1.0 - n * gamma)) / np.maximum(n, 1), 0.0)
+        self.beta = beta
+        self.scale = 1.0 / np.sqrt(1.0 - rho)
+
+    def __call__(self, a: np.ndarray) -> np.ndarray:
+        """Whiten (B, N) or (B, N, k) σ-weighted residuals or Jacobian rows (0 where unused)."""
+        a = np.asarray(a, float)
+        m = self.m if a.ndim == 2 else self.m[..., None]
+        b = self.beta[:, None] if a.ndim == 2 else self.beta[:, None, None]
+        return (a - b * m * a.sum(1, keepdims=True)) * self.scale
