@@ -51,6 +51,17 @@ THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
 #: glibc malloc variable Dask's nanny sets in its workers (``distributed.nanny.pre-spawn-environ``).
 MALLOC_VAR = "MALLOC_TRIM_THRESHOLD_"
 MMAP_VAR = "MALLOC_MMAP_THRESHOLD_"
+#: Dask settings of the local cluster's workers. A worker's event loop runs beside the task
+#: thread and, at Dask's defaults, took 0.2-0.6 s CPU per 1.7 s task of the towed-passive
+#: chain: the statistical profiler sampling the task's stack every 10 ms, the 20 ms loop tick,
+#: the 100 ms memory and 500 ms system monitors. At these values it takes 0.01-0.02 s
+#: (docs/performance/batch.md); the dashboard still shows the profile and the memory.
+WORKER_CONFIG = {
+    "distributed.worker.profile.interval": "100ms",
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+}
 
 
 def require_dask() -> Any:
@@ -301,7 +312,7 @@ class TaskResult:
 
 
 def start_client(workers: int | None = None, scheduler: str | None = None,
-                 threads: int | None = None, malloc_defaults: bool = True) -> tuple[Any, Any]:
+                 threads: int | None = None, dask_defaults: bool = False) -> tuple[Any, Any]:
     """A client of the cluster at ``scheduler``, or of a new LocalCluster of ``workers``
     worker processes (default: the cores), one task at a time each, with ``threads`` threads
     (default ``cores // workers``) for BLAS, OpenMP and numba.
@@ -314,10 +325,10 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
         Address of an existing scheduler (then no local cluster starts).
     threads : int, optional
         Threads per local worker (default ``cores // workers``).
-    malloc_defaults : bool
-        Start the local workers with glibc's malloc defaults, as ``arrayproc process`` runs
-        (True), or with Dask's ``MALLOC_TRIM_THRESHOLD_=65536`` (False: only for measuring
-        its cost, ``scripts/bench_batch.py``).
+    dask_defaults : bool
+        Start the local workers with Dask's own settings (``MALLOC_TRIM_THRESHOLD_=65536``
+        and :data:`WORKER_CONFIG`'s keys at Dask's values) instead of glibc's malloc defaults
+        and :data:`WORKER_CONFIG`: only to measure what they cost (``scripts/bench_batch.py``).
 
     Returns
     -------
@@ -338,20 +349,21 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
     import dask
     # The nanny's pre-spawn environment sets MALLOC_TRIM_THRESHOLD_=65536 in every worker.
     # Setting any glibc malloc threshold switches off its dynamic mmap threshold, so every
-    # array above 128 KiB is mmap-ed fresh and unmapped on free: 17x the minor page faults and
-    # +40-90 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
+    # array above 128 KiB is mmap-ed fresh and unmapped on free: 16-20x the minor page faults
+    # and +45-90 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
     # defaults, as `arrayproc process` does: None removes the variable from the pre-spawn
     # environment. The nanny also writes it into this process's environment, whence workers
     # started later would inherit it: Dask's own value found here is removed too (a value the
     # user chose is inherited unchanged).
     key = f"distributed.nanny.pre-spawn-environ.{MALLOC_VAR}"
-    unset: dict[str, Any] = {}
-    if malloc_defaults:
-        unset = {key: None}
+    config: dict[str, Any] = {}
+    if not dask_defaults:
+        config = {key: None, **WORKER_CONFIG}
         dask_value = dask.config.get(key, None)
         if dask_value is not None and os.environ.get(MALLOC_VAR) == str(dask_value):
             del os.environ[MALLOC_VAR]
-    with dask.config.set(unset):
+    # the nannies hand the configuration set here to their workers
+    with dask.config.set(config):
         # a free port: the scheduler's HTTP server (and the dashboard, with bokeh) always runs
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                            env=env, dashboard_address=":0",

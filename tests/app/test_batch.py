@@ -257,8 +257,10 @@ def test_local_workers_keep_glibc_malloc_defaults(tmp_path, client):
     """Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536 (the module's client here
     has it, and its nanny wrote it into this process's environment), which switches off glibc's
     dynamic mmap threshold: every array above 128 KiB is mapped fresh, page by page. The
-    batch's LocalCluster workers run without it, and the same task takes several times fewer
-    minor page faults there; a cluster that sets it gets a note."""
+    batch's LocalCluster workers run without it (and with the event-loop settings of
+    WORKER_CONFIG), and the same task takes several times fewer minor page faults there; a
+    cluster that sets it gets a note."""
+    import dask
     rec = make_recording(tmp_path / "m.h5", 12.0, 3)
     text = CHAIN.replace("block = 3000", "block = 8192")  # 8192 x 8 float32: 256 KiB blocks
     assert "note: 2 of 2 workers" in batch.malloc_note(client)
@@ -266,6 +268,8 @@ def test_local_workers_keep_glibc_malloc_defaults(tmp_path, client):
     try:
         env = ours.run(batch._malloc_env)
         assert list(env.values()) == [(None, None)]
+        for key, value in batch.WORKER_CONFIG.items():  # the quieter event loop reached it
+            assert list(ours.run(dask.config.get, key).values()) == [value], key
         assert batch.malloc_note(ours) is None
         faults = {}
         for name, c in (("dask", client), ("ours", ours)):
