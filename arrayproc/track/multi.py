@@ -47,6 +47,7 @@ Config (``[tracker]`` keys beside those of single mode)::
     sigma_speed_mps = 5.0         # unobserved tangential speed at initiation
     mirror = true
     moving_only = false           # only contacts flagged moving enter (still clutter never does)
+    min_snr_db = 0.0              # only contacts with snr_db at least this enter (0: all)
     [tracker.positions]
     q = 0.01
     sigma_speed_mps = 5.0
@@ -83,7 +84,8 @@ _SUB = {
                 "q_bearing": 0.002, "turn_ref_deg_s": 0.1, "merge_deg": 4.0,
                 "sigma_rate_deg_s": 0.5, "merge_d2": 4.0, "min_sigma_sin": 0.2},
     "contacts": {"sigma_bearing_deg": 2.0, "sigma_range_m": 20.0, "sigma_range_rate_mps": 0.3,
-                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True, "moving_only": False},
+                 "q": 0.01, "sigma_speed_mps": 5.0, "mirror": True, "moving_only": False,
+                 "min_snr_db": 0.0},
     "positions": {"q": 0.01, "sigma_speed_mps": 5.0},
 }
 
@@ -614,12 +616,15 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
                          "range_rate_mps"), products_path)
         if "ping" in g:
             c["ping"] = np.asarray(g["ping"], np.int64)
-        keep = None
+        keep = np.ones(c["time"].size, bool)
+        for key, col in (("moving_only", "moving"), ("min_snr_db", "snr_db")):
+            if cfg["contacts"][key] and col not in g:
+                raise FormatError(f"{products_path}: tracker.contacts.{key} needs the "
+                                  f"contacts' {col!r} column")
         if cfg["contacts"]["moving_only"]:
-            if "moving" not in g:
-                raise FormatError(f"{products_path}: tracker.contacts.moving_only needs the "
-                                  "contacts' 'moving' column")
-            keep = np.asarray(g["moving"], bool)
+            keep &= np.asarray(g["moving"], bool)
+        if cfg["contacts"]["min_snr_db"] > 0:
+            keep &= np.asarray(g["snr_db"], float) >= cfg["contacts"]["min_snr_db"]
         scans = contact_scans(c, nav, bool(cfg["contacts"]["mirror"]),
                               _sound_speed(products_path), keep)
         mgr = contacts_manager(cfg)
