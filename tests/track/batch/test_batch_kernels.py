@@ -95,3 +95,29 @@ def test_compact_grid_matches_dense_covariance():
         got = K.compact_grid_cost(xs, ys, hd, 7.3, tau, a, meas, phi, sc)
         ref = compact_cost_dense(xs, ys, hd, 7.3, tau, a, meas, exp_cov(t, 0.03, corr))
         np.testing.assert_allclose(got, ref, rtol=1e-8)
+
+
+def test_td_model_jacobian_matches_numpy():
+    """The polish kernel against delay_model and fim.td_jacobian (planar / 3-D, source at the
+    measurement or the emission time)."""
+    from arrayproc.track.batch.fim import td_jacobian
+    from arrayproc.track.batch.td_tma import delay_model
+
+    rng = np.random.default_rng(5)
+    tr = S.turn_track(dt=20.0)
+    el = S.line_elements(tr, 24, 0.5)
+    ex, ey = np.ascontiguousarray(el[..., 0]), np.ascontiguousarray(el[..., 1])
+    dz = rng.uniform(0.0, 60.0, el.shape[:2])
+    for _ in range(5):
+        x = np.r_[rng.uniform(-5e3, 5e3, 2), rng.uniform(-10, 10, 2)]
+        for ret in (False, True):
+            for d in (None, dz):
+                d2 = np.zeros(el.shape[:2]) if d is None else d**2
+                h, j = K.td_model_jacobian(x, tr.time, ex, ey, d2, 2, 1500.0, ret)
+                h_ref = delay_model(x, tr.time, el, 2, 1500.0, ret, d)
+                j_ref = td_jacobian(x, tr.time, el, 2, 1500.0, ret, d)
+                # range differences of km ranges: rounding ~ε r/c ≈ 1e-15 s
+                np.testing.assert_allclose(h, h_ref, rtol=0, atol=2e-14)
+                # differences of unit vectors, O(aperture/range): rounding ~1e-12 relative
+                scale = np.abs(j_ref).max((0, 1))
+                assert np.all(np.abs(j - j_ref) <= 1e-11 * scale)
