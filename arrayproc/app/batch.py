@@ -54,7 +54,7 @@ MMAP_VAR = "MALLOC_MMAP_THRESHOLD_"
 #: Dask settings of the local cluster's workers. A worker's event loop runs beside the task
 #: thread and, at Dask's defaults, took 0.2-0.6 s CPU per 1.7 s task of the towed-passive
 #: chain: the statistical profiler sampling the task's stack every 10 ms, the 20 ms loop tick,
-#: the 100 ms memory and 500 ms system monitors. At these values it takes 0.01-0.02 s
+#: the 100 ms memory and 500 ms system monitors. At these values it takes 0.03-0.06 s
 #: (docs/performance/batch.md); the dashboard still shows the profile and the memory.
 WORKER_CONFIG = {
     "distributed.worker.profile.interval": "100ms",
@@ -399,7 +399,7 @@ def malloc_note(client: Any) -> str | None:
         return None
     return (f"note: {n} of {len(env)} workers run with {MALLOC_VAR} set and no {MMAP_VAR} "
             "(Dask's default), which costs the chain about +50 % CPU in page faults; start "
-            f"them without it (see docs/scale-out.md, 'Worker memory settings')")
+            f"them without it (see docs/scale-out.md, 'Worker settings')")
 
 
 def _has_bokeh() -> bool:
