@@ -91,10 +91,7 @@ def detection_reader(path: str, kind: str | None = None, **kw: Any) -> Any:
 
 def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
     from stonesoup.models.measurement.linear import LinearGaussian
-    from stonesoup.models.measurement.nonlinear import (
-        Cartesian2DToBearing,
-        CartesianToBearingRangeRate2D,
-    )
+    from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing
     from stonesoup.types.detection import Detection
 
     from arrayproc.io.exports import _recording_info
@@ -121,6 +118,9 @@ def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
             raise FormatError(f"{r.path}: recording {src!r} with the ownship navigation "
                               "cannot be opened") from None
     sb = math.radians(r.sigma_bearing_deg)
+    if kind == "contacts":
+        yield from _contact_detections(r, g, nav, start, src, sb)
+        return
     for tk in np.unique(t):
         rows = np.flatnonzero(t == tk)
         when = start + dt.timedelta(seconds=float(tk))
@@ -129,21 +129,7 @@ def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
             own, _ = ownship_states(nav, np.array([tk]))
             o = own[0]
         for i in rows:
-            if kind == "contacts":
-                mm = CartesianToBearingRangeRate2D(
-                    ndim_state=4, mapping=(0, 2), velocity_mapping=(1, 3),
-                    noise_covar=np.diag([sb ** 2, r.sigma_range_m ** 2,
-                                         r.sigma_range_rate_mps ** 2]),
-                    translation_offset=np.array([[o[0]], [o[1]]]),
-                    velocity=np.array([[o[2]], [o[3]]]))
-                pb, sbd = g["bearing_port_deg"][i], g["bearing_stbd_deg"][i]
-                for b in ({float(pb), float(sbd)} if abs(((pb - sbd + 180) % 360) - 180) > 1e-6
-                          else {float(sbd)}):
-                    z = np.array([[to_ss_bearing(math.radians(b))], [g["range_m"][i]],
-                                  [g["range_rate_mps"][i]]], float)
-                    dets.add(Detection(z, timestamp=when, measurement_model=mm,
-                                       metadata={"row": int(i)}))
-            elif kind == "bearings":
+            if kind == "bearings":
                 mm = Cartesian2DToBearing(ndim_state=4, mapping=(0, 2),
                                           noise_covar=np.array([[sb ** 2]]),
                                           translation_offset=np.array([[o[0]], [o[1]]]))
@@ -157,6 +143,42 @@ def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
                 z = np.array([[g["x"][i]], [g["y"][i]], [g["z"][i]]], float)
                 dets.add(Detection(z, timestamp=when, measurement_model=mm,
                                    metadata={"row": int(i)}))
+        yield when, dets
+
+
+def _contact_detections(r: Any, g: dict, nav: Any, start: dt.datetime, src: str,
+                        sb: float) -> Iterable[tuple[dt.datetime, set]]:
+    """Detections of a ``contacts`` group, one scan per ping at its transmission time with the
+    ranges carried back to it, exactly as the package's own contacts tracker sees them
+    (:func:`arrayproc.track.multi.contact_scans`): the active chain stamps each contact with
+    its echo's reception time, so grouping by time would make one scan per contact."""
+    from stonesoup.models.measurement.nonlinear import CartesianToBearingRangeRate2D
+    from stonesoup.types.detection import Detection
+
+    from arrayproc.io.recording import DEFAULT_SOUND_SPEED, Recording
+    from arrayproc.track.multi import contact_scans
+
+    c = {k: np.asarray(g[k], float) for k in ("time", "range_m", "bearing_port_deg",
+                                              "bearing_stbd_deg", "range_rate_mps")}
+    if "ping" in g:
+        c["ping"] = np.asarray(g["ping"], np.int64)
+    try:
+        with Recording(src, require_geometry=False) as rec:
+            c_sound = float(rec.sound_speed)
+    except (OSError, FormatError):
+        c_sound = DEFAULT_SOUND_SPEED
+    for ts, Z, rows, o in contact_scans(c, nav, mirror=True, sound_speed=c_sound):
+        when = start + dt.timedelta(seconds=float(ts))
+        mm = CartesianToBearingRangeRate2D(
+            ndim_state=4, mapping=(0, 2), velocity_mapping=(1, 3),
+            noise_covar=np.diag([sb ** 2, r.sigma_range_m ** 2, r.sigma_range_rate_mps ** 2]),
+            translation_offset=np.array([[o[0]], [o[1]]]),
+            velocity=np.array([[o[2]], [o[3]]]))
+        dets = set()
+        for z, i in zip(Z, rows):
+            dets.add(Detection(np.array([[to_ss_bearing(z[0])], [z[1]], [z[2]]], float),
+                               timestamp=when, measurement_model=mm,
+                               metadata={"row": int(i)}))
         yield when, dets
 
 

@@ -65,6 +65,7 @@ import numpy as np
 from arrayproc.config import read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
+from arrayproc.io.text import as_text
 from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.manage.gaussian import ConstantVelocity, EKFBatch, KalmanBatch
 from arrayproc.track.manage.initiate import MofN
@@ -550,7 +551,7 @@ def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarr
 # ----------------------------------------------------------------------------- runner
 
 def _group(prod: dict, kind: str, products_path: str, name: str | None = None) -> dict:
-    groups = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == kind]
+    groups = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == kind]
     if name is not None:
         if name not in groups:
             raise FormatError(f"{products_path}: no {kind} group {name!r}")
@@ -560,10 +561,6 @@ def _group(prod: dict, kind: str, products_path: str, name: str | None = None) -
     if len(groups) > 1:
         raise ConfigError(f"{products_path}: several {kind} groups ({', '.join(groups)})")
     return prod[groups[0]]
-
-
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def _columns(g: dict, names: tuple[str, ...], products_path: str) -> dict[str, np.ndarray]:
@@ -657,7 +654,7 @@ def _sound_speed(products_path: str) -> float:
     from arrayproc.io.products import read_products
     from arrayproc.io.recording import DEFAULT_SOUND_SPEED, Recording
 
-    src = _s(read_products(products_path)["/"].get("source", ""))
+    src = as_text(read_products(products_path)["/"].get("source", ""))
     rec = resolve_beside(src, products_path) if src else ""
     if not rec or not os.path.exists(rec):
         return DEFAULT_SOUND_SPEED
@@ -688,7 +685,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     root = read_products(products_path)["/"]
-    src = tma_cfg.get("nav") or _s(root.get("source", ""))
+    src = tma_cfg.get("nav") or as_text(root.get("source", ""))
     nav = None
     rec = ""
     if src:

@@ -51,13 +51,19 @@ def contact_files(tmp_path, seed=4):
                             "bearing_stbd_deg", "range_rate_mps", "ping",
                             "absolute_doppler_mps", "snr_db", "moving")}
     truth = x0[:, None, :2] + t[None, :, None] * x0[:, None, 2:]
+    c = 1500.0   # the recording's sound speed (the format's default)
     for k, tk in enumerate(t):
         for s in range(2):
-            d = truth[s, k]
+            # as the active chain writes them: the echo of the ping sent at tk, scattered at
+            # t_sc (|d(t_sc)| = c (t_sc - tk)) and stamped with its reception time
             v = x0[s, 2:]
+            t_sc = tk
+            for _ in range(30):
+                t_sc = tk + float(np.hypot(*(x0[s, :2] + t_sc * v))) / c
+            d = x0[s, :2] + t_sc * v
             r = float(np.hypot(*d))
             b = math.degrees(math.atan2(d[0], d[1])) + SIG[0] * rng.standard_normal()
-            rows["time"].append(tk)
+            rows["time"].append(t_sc + r / c)
             rows["range_m"].append(r + SIG[1] * rng.standard_normal())
             rows["cone_deg"].append(b % 360)
             rows["bearing_port_deg"].append(b % 360)

@@ -43,6 +43,7 @@ def test_two_targets_agree_with_stonesoup(tmp_path):
     mgr = contacts_manager(cfg)
     cols = {k: np.asarray(c[k], float) for k in ("time", "range_m", "bearing_port_deg",
                                                  "bearing_stbd_deg", "range_rate_mps")}
+    cols["ping"] = np.asarray(c["ping"], np.int64)   # one scan per ping, as `arrayproc track`
     for t, Z, _rows, own in contact_scans(cols, nav, True):
         mgr.step(t, Z, own)
     ours = sorted((tr for tr in mgr.tracks if tr.status is Status.CONFIRMED),
