@@ -13,8 +13,11 @@ frame grids), one task per segment writes a part file and a last task merges the
 Without ``--scheduler`` a :class:`distributed.LocalCluster` of ``--workers`` processes (default:
 the cores) runs here, each worker one task at a time with ``cores // workers`` threads for
 BLAS, numba and the stages' own workers (a stage's ``threads = 0``, "all cores", becomes that
-share), so workers do not oversubscribe the cores. With ``--scheduler`` the tasks go to that
-cluster (dask-jobqueue, Kubernetes, SSH), whose workers must see the same paths.
+share), so workers do not oversubscribe the cores; they start with glibc's malloc defaults
+(without the ``MALLOC_TRIM_THRESHOLD_`` Dask's nanny sets) and a quieter event loop
+(:data:`WORKER_CONFIG`), which together cost a task +35-70 % CPU at Dask's defaults
+(docs/performance/batch.md). With ``--scheduler`` the tasks go to that cluster
+(dask-jobqueue, Kubernetes, SSH), whose workers must see the same paths.
 
 Outputs are written under a temporary name and renamed when complete (``complete = True``),
 so a task run twice, or retried after its worker died (``retries``; Dask moves the task of a
