@@ -117,7 +117,8 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
                 if method == "delays":
                     elem = np.stack([p.elements[:, :2] for p in poses])
                     ref = meas["reference"]
-                    fit = delay_model(st, ts - g["t0"][i], elem, ref, rec.sound_speed)
+                    fit = delay_model(st, ts - g["t0"][i], elem, ref, rec.sound_speed,
+                                      retarded=bool(a.get("retarded_time", 0)))
                     chans = np.unique(np.linspace(0, elem.shape[1] - 1, 5).astype(int))
                     chans = chans[chans != ref]
                     for k in chans:
@@ -135,7 +136,8 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
                         fit = compact_bearings(q, np.hypot(st[2], st[3]), ts - g["t0"][i],
                                                obs.mean(0))
                     else:
-                        fit = bearing_model(st, ts - g["t0"][i], obs)
+                        fit = bearing_model(st, ts - g["t0"][i], obs, rec.sound_speed
+                                            if a.get("retarded_time", 0) else None)
                     axm.plot(np.degrees(y) % 360, ts, "b.", ms=3,
                              label=f"measured ({side or 'bearing'})" if lab else None)
                     axm.plot(np.degrees(fit) % 360, ts, "r-", label="fitted" if lab else None)

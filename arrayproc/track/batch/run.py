@@ -412,7 +412,9 @@ def run_tma(products_path: str, config_path: str, output_path: str,
                     side=",".join(s.side for s in sols),
                     sigma_bearing_deg=cfg["sigma_bearing_deg"],
                     sigma_delay_s=cfg["sigma_delay_s"],
-                    delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols))
+                    delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols),
+                    array_motion=int(cfg["array_motion"]),
+                    retarded_time=int(cfg["retarded_time"]))
         g.append(
             t0=np.array([s.t0 for s in sols]), t1=np.array([s.t1 for s in sols]),
             method=np.array([s.method.encode() for s in sols], dtype="S8"),
