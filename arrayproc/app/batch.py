@@ -15,7 +15,7 @@ the cores) runs here, each worker one task at a time with ``cores // workers`` t
 BLAS, numba and the stages' own workers (a stage's ``threads = 0``, "all cores", becomes that
 share), so workers do not oversubscribe the cores; they start with glibc's malloc defaults
 (without the ``MALLOC_TRIM_THRESHOLD_`` Dask's nanny sets) and a quieter event loop
-(:data:`WORKER_CONFIG`), which together cost a task +35-70 % CPU at Dask's defaults
+(:data:`WORKER_CONFIG`), which together cost a task +33-87 % CPU at Dask's defaults
 (docs/performance/batch.md). With ``--scheduler`` the tasks go to that cluster
 (dask-jobqueue, Kubernetes, SSH), whose workers must see the same paths.
 
@@ -353,7 +353,7 @@ def start_client(workers: int | None = None, scheduler: str | None = None,
     # The nanny's pre-spawn environment sets MALLOC_TRIM_THRESHOLD_=65536 in every worker.
     # Setting any glibc malloc threshold switches off its dynamic mmap threshold, so every
     # array above 128 KiB is mmap-ed fresh and unmapped on free: 16-20x the minor page faults
-    # and +45-90 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
+    # and +33-87 % task CPU for the chain (docs/performance/batch.md). The workers keep glibc's
     # defaults, as `arrayproc process` does: None removes the variable from the pre-spawn
     # environment. The nanny also writes it into this process's environment, whence workers
     # started later would inherit it: Dask's own value found here is removed too (a value the
