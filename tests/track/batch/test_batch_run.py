@@ -142,6 +142,8 @@ def test_config_errors(tmp_path):
         load_tma_config(_cfg(tmp_path, 'method = "bearings"\nbogus = 1\n'))
     with pytest.raises(ConfigError, match="tma.speed_mps"):
         load_tma_config(_cfg(tmp_path, 'method = "compact"\n'))
+    with pytest.raises(ConfigError, match="tma.delay_correlation"):
+        load_tma_config(_cfg(tmp_path, 'method = "delays"\ndelay_correlation = 1.0\n'))
     with pytest.raises(ConfigError, match="tma.method"):
         load_tma_config(_cfg(tmp_path, 'method = "kalman"\n'))
     empty = tmp_path / "e.toml"
