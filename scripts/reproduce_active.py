@@ -236,7 +236,7 @@ min_range_m = 150.0
 def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
                   range_m: float, cone_deg: float, reuse: bool = False,
                   beams: tuple[float, float, int] = (0.0, 180.0, 181),
-                  blank: bool = False) -> dict:
+                  blank: str = "") -> dict:
     from arrayproc.chain import build_chain, run_chain
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.recording import Recording
@@ -247,10 +247,14 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     c_sim0 = time.process_time()
     rec_path = rec_path or simulate_schedule(out, duration)
     t_sim, c_sim = time.perf_counter() - t0, time.process_time() - c_sim0
-    prod = out / ("active_products_blank.h5" if blank else "active_products.h5")
+    # blank: "" (no gate), "all" (every ping) or comma-separated waveform names/kinds
+    sfx = "" if not blank else ("_blank" if blank == "all" else "_blank_" + blank.replace(",",
+                                                                                          "_"))
+    prod = out / f"active_products{sfx}.h5"
+    blank_key = ("false" if not blank else "true" if blank == "all"
+                 else "[" + ", ".join(f'"{x}"' for x in blank.split(",")) + "]")
     spec = build_chain(CHAIN.format(range_m=range_m, cone_deg=cone_deg, b0=beams[0],
-                                    b1=beams[1], nb=int(beams[2]),
-                                    blank="true" if blank else "false"))
+                                    b1=beams[1], nb=int(beams[2]), blank=blank_key))
     t0 = time.perf_counter()
     c0 = time.process_time()
     if not (reuse and prod.exists()):
@@ -278,7 +282,7 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
     gate_end = float(np.max(np.linalg.norm(pos - act.projector, axis=1))) / C + T + 0.02
     res = {"recording": str(rec_path), "simulate_s": t_sim, "simulate_cpu_s": c_sim,
            "process_wall_s": t_proc, "process_cpu_s": c_proc, "products": str(prod),
-           "beams": list(beams), "blank_direct": blank, "loadavg": os.getloadavg(),
+           "beams": list(beams), "blank_direct": blank_key, "loadavg": os.getloadavg(),
            "bpsk_pings": len(bpsk_pings),
            "hfm_pings": len(act.waveform) - len(bpsk_pings), "range_cell_m": cell}
     rows = []
@@ -293,7 +297,8 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
         snr_pred = (tr["level_db"][k] - noise_db + 10 * np.log10(T) + 10 * np.log10(n_el)
                     - 1.76)
         delay = float(tr["time"][k] - act.time[p])
-        if blank:  # the part of the echo received after the direct-blast gate
+        if blank in ("all", "bpsk") or "bpsk" in blank.split(","):
+            # the part of the echo received after the direct-blast gate
             snr_pred += 10 * np.log10(max(1e-6, min(1.0, (delay - gate_end) / T + 1.0)))
         m = np.flatnonzero((full["ping"] == p) & (wv == "bpsk")
                            & (np.abs(full["range_m"] - tr["range_array_m"][k]) < 30.0)
@@ -402,7 +407,7 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
                                                        if not r["detected"]
                                                        and not r.get("bracket_detected")]}
     from arrayproc.plots.contacts import plot_contacts
-    plot_contacts(str(prod), str(out / ("contacts_blank.png" if blank else "contacts.png")))
+    plot_contacts(str(prod), str(out / f"contacts{sfx}.png"))
     return res
 
 
@@ -418,8 +423,9 @@ def main() -> None:
     ap.add_argument("--cfar-slow", action="store_true")
     ap.add_argument("--beams", default="0,180,181",
                     help="scenario: cone angles start,stop,count of active_beams (deg)")
-    ap.add_argument("--blank-direct", action="store_true",
-                    help="scenario: active_beams with blank_direct = true")
+    ap.add_argument("--blank-direct", nargs="?", const="all", default="",
+                    help="scenario: active_beams blank_direct: every ping (no value) or the "
+                    "comma-separated waveform names/kinds given (e.g. bpsk)")
     ap.add_argument("--reuse", action="store_true",
                     help="scenario: reuse OUT's recording and products when present")
     args = ap.parse_args()

@@ -23,7 +23,10 @@ rate is -U cos(cone), and
     rdot_abs = rdot + U cos(cone)
 
 is zero for it: the thesis's rdot_abs = rdot~ - U cos(theta) with its Doppler counted positive
-closing. ``moving`` is |rdot_abs| > ``moving_threshold``.
+closing. In a turn the projector's leg (at the transmission, with the heading then and the
+projector's own swing) and the array's (at the reception) differ, and the own closing depends
+on the side the scatterer is on: :func:`ownship_closing_sides` gives both,
+:func:`absolute_doppler` uses their mean.
 """
 
 from __future__ import annotations
@@ -81,11 +84,108 @@ def bistatic_path(r: np.ndarray, cone_deg: np.ndarray, projector: np.ndarray,
     return L
 
 
+def ownship_closing_sides(cone_deg: np.ndarray, speed_tx: np.ndarray | float,
+                          speed_rx: np.ndarray | float | None = None,
+                          dheading_deg: np.ndarray | float = 0.0,
+                          turn_rate_dps: np.ndarray | float = 0.0,
+                          projector: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Closing speed (m/s) of a still scatterer due to the platform's own motion, to port and
+    to starboard: the two-way mean of the projector's leg (at the transmission) and the
+    array's (at the reception).
+
+    The scatterer lies at cone angle ``cone`` from the array's axis at the reception, at true
+    bearing b = h_rx -/+ cone (port / starboard). In the body frame of the transmission
+    (forward x, starboard y) its direction from the projector is at rho = b - h_tx =
+    dh -/+ cone from the bow (dh = h_rx - h_tx; far field: the same direction as from the
+    array). The projector, at p in the body frame of a platform turning at omega (heading
+    rate, rad/s, positive to starboard), moves at U_tx x + omega z x p = (U_tx - omega p_y,
+    omega p_x); the array's reference point moves at U_rx along its axis. So
+
+        closing = (U_tx cos(rho) + omega (p_x sin(rho) - p_y cos(rho)) + U_rx cos(cone)) / 2,
+
+    U cos(cone) on a straight leg at constant speed (the thesis's eq. (4.9) term, the same
+    for both sides). In a turn the sides differ: by U_tx sin(cone) sin(dh) from the heading
+    change and by 2 omega p_x sin(cone) cos(dh) from the projector's swing (a projector 60 m
+    ahead in a 1 deg/s turn moves sideways at 1.05 m/s).
+
+    Parameters
+    ----------
+    cone_deg : ndarray
+        Cone angle at the reception, deg.
+    speed_tx : float or ndarray
+        Platform speed at the transmission, m/s.
+    speed_rx : float or ndarray, optional
+        Platform speed at the reception, m/s (default: ``speed_tx``).
+    dheading_deg : float or ndarray
+        Heading at the reception minus heading at the transmission, deg.
+    turn_rate_dps : float or ndarray
+        Heading rate at the transmission, deg/s (positive: turning to starboard).
+    projector : (3,) ndarray, optional
+        Projector position in the body frame (forward, starboard, down), m (default: at the
+        array's reference point).
+
+    Returns
+    -------
+    port, stbd : ndarray
+        Closing speed for a scatterer to port and to starboard, m/s (positive closing).
+    """
+    a = np.deg2rad(np.asarray(cone_deg, float))
+    u_tx = np.asarray(speed_tx, float)
+    u_rx = u_tx if speed_rx is None else np.asarray(speed_rx, float)
+    dh = np.deg2rad(np.asarray(dheading_deg, float))
+    w = np.deg2rad(np.asarray(turn_rate_dps, float))
+    p = np.zeros(3) if projector is None else np.asarray(projector, float)
+    out = []
+    for rho in (dh - a, dh + a):
+        out.append(0.5 * (u_tx * np.cos(rho) + w * (p[0] * np.sin(rho) - p[1] * np.cos(rho))
+                          + u_rx * np.cos(a)))
+    return out[0], out[1]
+
+
+def ownship_closing(cone_deg: np.ndarray, speed_tx: np.ndarray | float,
+                    speed_rx: np.ndarray | float | None = None,
+                    dheading_deg: np.ndarray | float = 0.0,
+                    turn_rate_dps: np.ndarray | float = 0.0,
+                    projector: np.ndarray | None = None) -> np.ndarray:
+    """Own closing speed (m/s) without the side: the mean of the port and starboard values of
+    :func:`ownship_closing_sides` (same parameters), U cos(cone) on a straight leg.
+
+    Returns
+    -------
+    ndarray
+        Closing speed, m/s (positive closing).
+    """
+    port, stbd = ownship_closing_sides(cone_deg, speed_tx, speed_rx, dheading_deg,
+                                       turn_rate_dps, projector)
+    return 0.5 * (port + stbd)
+
+
 def absolute_doppler(range_rate: np.ndarray, cone_deg: np.ndarray,
-                     speed: np.ndarray | float) -> np.ndarray:
-    """rdot_abs = rdot + U cos(cone) (m/s; thesis eq. (4.9), opening-positive convention)."""
-    return np.asarray(range_rate, float) + np.asarray(speed, float) * np.cos(
-        np.deg2rad(np.asarray(cone_deg, float)))
+                     speed: np.ndarray | float, speed_rx: np.ndarray | float | None = None,
+                     dheading_deg: np.ndarray | float = 0.0,
+                     turn_rate_dps: np.ndarray | float = 0.0,
+                     projector: np.ndarray | None = None) -> np.ndarray:
+    """rdot_abs = rdot + own closing (m/s; thesis eq. (4.9), opening-positive convention), the
+    side-averaged own closing of :func:`ownship_closing`.
+
+    Parameters
+    ----------
+    range_rate : ndarray
+        Measured range rate, m/s, positive opening.
+    cone_deg : ndarray
+        Cone angle, deg.
+    speed, speed_rx, dheading_deg, turn_rate_dps, projector
+        As ``speed_tx`` and the others of :func:`ownship_closing_sides`; with the defaults
+        the closing is U cos(cone).
+
+    Returns
+    -------
+    ndarray
+        Absolute Doppler, m/s (0 for a still scatterer).
+    """
+    return np.asarray(range_rate, float) + ownship_closing(cone_deg, speed, speed_rx,
+                                                           dheading_deg, turn_rate_dps,
+                                                           projector)
 
 
 def bearings(heading_deg: np.ndarray | float, cone_deg: np.ndarray) -> tuple[np.ndarray,

@@ -14,10 +14,19 @@ rows:
 - ``time``: echo reception time t_p + tau, s; ``ping``; ``waveform`` (name, bytes);
 - ``range_m``: from the bistatic path c tau and the projector offset
   (:func:`arrayproc.stages.active.contacts.bistatic_range`); ``cone_deg`` (beam axis);
-  ``bearing_port_deg`` / ``bearing_stbd_deg`` = heading -/+ cone;
-- ``range_rate_mps`` (positive opening) and ``absolute_doppler_mps`` = rdot + U cos(cone)
-  (eq. (4.9) in the opening-positive convention, U the array's speed at the ping);
-  ``moving`` = |absolute Doppler| > ``moving_threshold`` (knots, default 2 as the thesis);
+  ``bearing_port_deg`` / ``bearing_stbd_deg`` = heading -/+ cone, with the array's heading
+  at the echo's reception (``/nav`` of the recording at the echo's middle, t_p + tau + T/2:
+  the beams are formed on the array as it lies while the echo arrives, and the matched
+  filter integrates over the pulse length T; without a recording, the heading at the
+  transmission);
+- ``range_rate_mps`` (positive opening); ``absolute_doppler_port_mps`` /
+  ``absolute_doppler_stbd_mps`` = rdot + own closing (eq. (4.9) in the opening-positive
+  convention) if the scatterer is to port / starboard: the array's leg with its speed at the
+  reception, the projector's with the speed, heading and heading rate of the transmission
+  (:func:`arrayproc.stages.active.contacts.ownship_closing_sides`; both rdot + U cos(cone)
+  on a straight leg); ``absolute_doppler_mps`` their mean; ``moving`` = the smaller of the
+  two magnitudes > ``moving_threshold`` (knots, default 2 as the thesis): still on neither
+  side;
 - ``snr_db``: peak over the CFAR's noise estimate, dB.
 
 A Doppler-insensitive ping's contacts carry range rate 0 and absolute Doppler U cos(cone)
@@ -41,7 +50,7 @@ from arrayproc.errors import ConfigError
 
 from . import _common as cm
 from .cfar import CfarConfig, cluster, detect
-from .contacts import absolute_doppler, bearings, bistatic_range, merge
+from .contacts import bearings, bistatic_range, merge, ownship_closing_sides
 
 KNOT = 1852.0 / 3600.0
 
@@ -126,6 +135,24 @@ class Cfar(Stage):
             if pool is not None:
                 pool.shutdown()
 
+    def _nav_at(self, t: np.ndarray, pm: PingMeta) -> tuple[np.ndarray, np.ndarray]:
+        """Array heading (deg) and speed (m/s) at the reception times ``t`` from the
+        recording's navigation; the ping's (transmission) values without a recording."""
+        nav = getattr(getattr(self.ctx, "recording", None), "nav", None)
+        if nav is None or t.size == 0:
+            return np.full(t.size, float(pm.heading)), np.full(t.size, float(pm.speed))
+        _, hd, _, spd = nav.at(t)
+        return np.asarray(hd, float), np.asarray(spd, float)
+
+    def _turn_rate(self, pm: PingMeta) -> float:
+        """Heading rate at the transmission, deg/s (central difference of ``/nav`` over
+        +-0.5 s; 0 without a recording)."""
+        nav = getattr(getattr(self.ctx, "recording", None), "nav", None)
+        if nav is None:
+            return 0.0
+        _, hd, _, _ = nav.at(np.array([pm.t_ping - 0.5, pm.t_ping + 0.5]))
+        return float(np.mod(hd[1] - hd[0] + 180.0, 360.0) - 180.0)
+
     def _finish(self, b: Block, cand: list, cells: int) -> dict:
         pm = b.meta
         m = pm.extra
@@ -142,14 +169,27 @@ class Cfar(Stage):
         # through the projector offset), strongest peak first (equal noise on every beam)
         keep = merge(c * tau, cone, peak, 2 * gate, self.merge_cone_deg)
         cone, tau, rate, snr, rng = cone[keep], tau[keep], rate[keep], snr[keep], rng[keep]
-        absd = absolute_doppler(rate, cone, pm.speed)
-        port, stbd = bearings(pm.heading, cone)
-        moving = np.abs(absd) > self.moving_threshold * KNOT
+        t_rx = b.t0 + tau
+        # the beams integrate the echo over its length T: the cone is the one at the echo's
+        # middle (a turn at 1 deg/s moves the heading by 2 deg over a 4 s pulse)
+        hd_rx, u_rx = self._nav_at(t_rx + 0.5 * float(m.get("duration", 0.0)), pm)
+        # eq. (4.9) with the projector's leg at the transmission and the array's at the
+        # reception, for either side (contacts.ownship_closing_sides)
+        dh = np.mod(hd_rx - pm.heading + 180.0, 360.0) - 180.0
+        cl_port, cl_stbd = ownship_closing_sides(cone, pm.speed, u_rx, dh,
+                                                 self._turn_rate(pm), pm.projector)
+        absd_port, absd_stbd = rate + cl_port, rate + cl_stbd
+        absd = 0.5 * (absd_port + absd_stbd)
+        port, stbd = bearings(hd_rx, cone)
+        # moving: still on neither side (the same as |absd| on a straight leg)
+        moving = np.minimum(np.abs(absd_port), np.abs(absd_stbd)) > self.moving_threshold * KNOT
         if cm.insensitive(m["kind"]):
             moving[:] = False
         n = rng.size
-        return {"time": b.t0 + tau, "ping": np.full(n, pm.ping, np.int64), "range_m": rng,
+        return {"time": t_rx, "ping": np.full(n, pm.ping, np.int64), "range_m": rng,
                 "cone_deg": cone, "bearing_port_deg": port, "bearing_stbd_deg": stbd,
-                "range_rate_mps": rate, "absolute_doppler_mps": absd, "snr_db": snr,
+                "range_rate_mps": rate, "absolute_doppler_mps": absd,
+                "absolute_doppler_port_mps": absd_port,
+                "absolute_doppler_stbd_mps": absd_stbd, "snr_db": snr,
                 "moving": moving, "waveform": np.full(n, str(pm.waveform).encode(), "S32"),
                 "cells": np.full(n, cells, np.int64)}

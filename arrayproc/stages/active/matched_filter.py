@@ -5,9 +5,10 @@ Input: ``active_beams`` blocks (one per ping). Output: blocks of domain ``RANGE_
 (beam x range_rate x range) holding |chi|^2 (float32) of ``chunk`` beams x D range-rate
 channels x the ping's lags, with the ping's :class:`arrayproc.chain.domains.PingMeta`; its
 ``extra``: ``kind`` (waveform kind), ``range_rates`` (D,) m/s, ``lag0`` (lag index of column
-0), ``fs_bb``, ``bandwidth``, ``beam_index`` (indices into the ping's beams), ``cones`` (deg),
-``last`` (the ping's final block) and ``cells`` (cells computed in the block). A ping's
-cube (e.g. 271 channels x 181 beams x 35 000 lags) is never held: one chunk at a time.
+0), ``fs_bb``, ``bandwidth``, ``duration`` (pulse length T, s), ``beam_index`` (indices into
+the ping's beams), ``cones`` (deg), ``last`` (the ping's final block) and ``cells`` (cells
+computed in the block). A ping's cube (e.g. 271 channels x 181 beams x 35 000 lags) is
+never held: one chunk at a time.
 
 The replicas come from the recording (``/active/waveforms``), so one chain serves any
 waveform; a Doppler-insensitive one (HFM, LFM) gets the single channel 0 m/s.
@@ -144,7 +145,8 @@ class MatchedFilter(Stage):
 
     def _meta(self, b: Block, wf, rr: np.ndarray, **kw) -> PingMeta:
         m = b.meta
-        extra = {"kind": wf.kind, "range_rates": rr, "fs_bb": b.fs, "bandwidth": wf.bandwidth}
+        extra = {"kind": wf.kind, "range_rates": rr, "fs_bb": b.fs, "bandwidth": wf.bandwidth,
+                 "duration": wf.duration}
         extra.update(kw)
         return PingMeta(m.ping, m.waveform, m.t_ping, m.fc, m.speed, m.heading, m.projector,
                         extra)

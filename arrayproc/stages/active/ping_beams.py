@@ -12,7 +12,9 @@ baseband's lowest frequency f0; ``extra``: ``plan``, the
 complete echoes inside the window). Input blocks are consumed, not
 passed on; memory holds one window of hydrophone samples and the beams of one ping.
 
-Direct blast (``blank_direct = true``): the projector's own pulse reaches element n at
+Direct blast (``blank_direct = true``, or a list of waveform names or kinds such as
+``["bpsk"]`` to blank only those pings; an entry that is neither a waveform of the recording
+nor a kind is a configuration error): the projector's own pulse reaches element n at
 t_p + |p − r_n|/c (p the projector's body-frame position from ``/active``, r_n the element's)
 and lasts the pulse length T; its matched-filter response, a sidelobe plateau −10 log10 N
 below a peak some 100 dB above the echoes (thesis eq. (4.5)), covers lags up to T, i.e. ranges
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -55,8 +58,9 @@ class ActiveBeams(Stage):
                       "waveform's main lobe widened by the Doppler of +-15 m/s)"),
         "shading": Param("str", "hann", "array shading", choices=("none", "hann", "hamming")),
         "threads": Param("int", 0, "FFT and beamforming threads (0: all cores)"),
-        "blank_direct": Param("bool", False, "zero each element's samples during the direct "
-                              "arrival of the ping (projector offset from /active)"),
+        "blank_direct": Param("any", False, "zero each element's samples during the direct "
+                              "arrival of the ping (projector offset from /active): true, "
+                              "false, or a list of waveform names or kinds, e.g. [\"bpsk\"]"),
         "blank_margin_s": Param("float", 0.02, "extra time blanked before and after the "
                                 "direct arrival, s"),
     }
@@ -68,6 +72,7 @@ class ActiveBeams(Stage):
         if self.blank_margin_s < 0:
             raise ConfigError(f"{w}: key 'blank_margin_s' must be >= 0 s, got "
                               f"{self.blank_margin_s}")
+        self._blank = blank_selection(self.blank_direct, w)
         try:
             self.beam_axis, self._dirs, self.beam_mode = beam_axis(self.beams)
         except ConfigError as e:
@@ -102,6 +107,8 @@ class ActiveBeams(Stage):
         fs = rec.fs
         n_total = rec.n_samples
         wins = [self._window(act, i, fs, n_total) for i in range(act.time.size)]
+        self._blank_wf = blanked_waveforms(self._blank, act.waveforms, where,
+                                           getattr(rec, "path", ""))
         plans = {}
         for name, wf in act.waveforms.items():
             band = tuple(self.band) if self.band is not None else cm.default_band(wf, c, fs)
@@ -138,7 +145,7 @@ class ActiveBeams(Stage):
         if bnd > a:
             x[a - s0:bnd - s0] = buf[a - buf_start:bnd - buf_start]
         name = act.waveform[i]
-        if self.blank_direct:
+        if name in self._blank_wf:
             blank_direct(x, s0 / fs - float(act.time[i]), positions, act.projector,
                          act.waveforms[name].duration, fs, c, self.blank_margin_s)
         plan = band_plan(fs, n, plans[name])
@@ -156,6 +163,58 @@ class ActiveBeams(Stage):
                         {"plan": plan, "n_lags": n_lags, "beam_mode": self.beam_mode})
         return Block(y.T, Domain.BEAM_TIME, tp, n / fs, plan.fs_bb, positions, pose=pose,
                      beams=self.beam_axis, index=i, meta=meta)
+
+
+WAVEFORM_KINDS = ("bpsk", "cw", "hfm", "lfm")
+
+
+def blank_selection(value: Any, where: str) -> bool | frozenset[str]:
+    """Check the ``blank_direct`` key: true/false, or a non-empty list of waveform names or
+    kinds (returned as a frozenset).
+
+    Raises ConfigError (one line, naming the stage and the key) otherwise.
+    """
+    if isinstance(value, bool):
+        return value
+    if (isinstance(value, (list, tuple)) and value
+            and all(isinstance(v, str) and v.strip() for v in value)):
+        return frozenset(value)
+    raise ConfigError(f"{where}: key 'blank_direct' must be true, false or a non-empty list of "
+                      f"waveform names or kinds (e.g. [\"bpsk\"]), got {value!r}")
+
+
+def blanked_waveforms(sel: bool | frozenset[str], waveforms: dict, where: str,
+                      path: str = "") -> frozenset[str]:
+    """Names of the recording's waveforms whose pings are blanked.
+
+    Parameters
+    ----------
+    sel : bool or frozenset of str
+        From :func:`blank_selection`: all, none, or names/kinds; an entry matches a waveform
+        whose name or kind (bpsk, cw, hfm, lfm) it equals.
+    waveforms : dict
+        The recording's ``/active/waveforms``: name -> waveform (with ``kind``).
+    where, path : str
+        Stage and recording, for the error message.
+
+    Returns
+    -------
+    frozenset of str
+        Waveform names.
+
+    Raises
+    ------
+    ConfigError
+        An entry that is neither a waveform of the recording nor a waveform kind (a typo).
+    """
+    if isinstance(sel, bool):
+        return frozenset(waveforms) if sel else frozenset()
+    bad = sorted(x for x in sel if x not in waveforms and x not in WAVEFORM_KINDS)
+    if bad:
+        raise ConfigError(f"{where}: key 'blank_direct' names {bad[0]!r}, neither a waveform of "
+                          f"{path or 'the recording'} ({', '.join(sorted(waveforms))}) nor a "
+                          f"waveform kind ({', '.join(WAVEFORM_KINDS)})")
+    return frozenset(n for n, wf in waveforms.items() if n in sel or wf.kind in sel)
 
 
 def direct_gate(positions: np.ndarray, projector: np.ndarray, duration: float, fs: float,

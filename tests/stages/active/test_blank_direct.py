@@ -14,7 +14,12 @@ from arrayproc.chain import build_chain, run_chain
 from arrayproc.errors import ConfigError
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
-from arrayproc.stages.active.ping_beams import blank_direct, direct_gate
+from arrayproc.stages.active.ping_beams import (
+    blank_direct,
+    blank_selection,
+    blanked_waveforms,
+    direct_gate,
+)
 
 C = 1500.0
 FS = 5120.0
@@ -110,18 +115,89 @@ def test_near_scatterer_found_only_with_blanking(tmp_path):
     assert r_true < C * 1.0 / 2  # inside the direct blast's span
     cell = C / (2 * 255.0)
     found = {}
-    for blank in ("", "blank_direct = true"):
-        con = contacts(path, tmp_path / f"p{len(blank)}.h5", blank)
+    # per waveform: the recording's only waveform is a BPSK named "bpsk"; ["hfm"] (a kind
+    # with no waveform here) blanks nothing, ["bpsk"] (name and kind) what true blanks
+    opts = ("", "blank_direct = true", 'blank_direct = ["bpsk"]', 'blank_direct = ["hfm"]')
+    for i, blank in enumerate(opts):
+        con = contacts(path, tmp_path / f"p{i}.h5", blank)
         m = np.flatnonzero(np.abs(con["range_m"] - r_true) < 2 * cell)
         found[blank] = con, m
-    con, m = found[""]
-    assert m.size == 0  # under the plateau of the blast (~50 dB above the echo)
-    con, m = found["blank_direct = true"]
-    assert m.size
-    j = m[np.argmax(con["snr_db"][m])]
-    assert abs(con["cone_deg"][j] - tr["cone_deg"][0]) < 6.0
-    assert abs(con["range_rate_mps"][j] - tr["range_rate_mps"][0]) < 0.5
-    assert not bool(con["moving"][j])
+    for blank in ("", 'blank_direct = ["hfm"]'):
+        con, m = found[blank]
+        assert m.size == 0  # under the plateau of the blast (~50 dB above the echo)
+    for blank in ("blank_direct = true", 'blank_direct = ["bpsk"]'):
+        con, m = found[blank]
+        assert m.size
+        j = m[np.argmax(con["snr_db"][m])]
+        assert abs(con["cone_deg"][j] - tr["cone_deg"][0]) < 6.0
+        assert abs(con["range_rate_mps"][j] - tr["range_rate_mps"][0]) < 0.5
+        assert not bool(con["moving"][j])
+    a, b = found["blank_direct = true"][0], found['blank_direct = ["bpsk"]'][0]
+    np.testing.assert_array_equal(a["range_m"], b["range_m"])
+
+
+def test_blank_selection_by_name_and_kind():
+    from types import SimpleNamespace as NS
+    wfs = {"hfm": NS(kind="hfm"), "bpsk": NS(kind="bpsk"), "long": NS(kind="bpsk")}
+    w = "stage 'beams'"
+    assert blanked_waveforms(blank_selection(True, w), wfs, w) == {"hfm", "bpsk", "long"}
+    assert blanked_waveforms(blank_selection(False, w), wfs, w) == frozenset()
+    assert blanked_waveforms(blank_selection(["bpsk"], w), wfs, w) == {"bpsk", "long"}
+    assert blanked_waveforms(blank_selection(["long"], w), wfs, w) == {"long"}
+    assert blanked_waveforms(blank_selection(["lfm", "hfm"], w), wfs, w) == {"hfm"}
+    with pytest.raises(ConfigError, match="'bpks', neither a waveform"):
+        blanked_waveforms(blank_selection(["bpks"], w), wfs, w, "r.h5")
+
+
+def test_blank_only_the_listed_waveform_in_a_schedule(tmp_path):
+    """An HFM/BPSK schedule: with ["bpsk"] the BPSK ping's beams lose the direct blast and the
+    HFM ping's are those of the unblanked chain, bit for bit."""
+    from arrayproc.sim.run import simulate
+    from arrayproc.sim.scenario import parse_scenario
+    d = scenario(rock=False)
+    del d["noise"]
+    act = d["active"]
+    for k in ("waveform", "fc", "bits", "duration", "taper"):
+        del act[k]
+    act["waveforms"] = {"hfm": {"waveform": "hfm", "f0": 1372.0, "f1": 1628.0, "duration": 1.0,
+                                "taper": 0.02},
+                        "bpsk": {"waveform": "bpsk", "fc": 1500.0, "bits": 255,
+                                 "duration": 1.0, "taper": 0.02}}
+    act.update(schedule=["hfm", "bpsk"], interval=1.5, count=2)
+    path = simulate(parse_scenario(d, "sched.toml"), tmp_path / "s.h5")
+    spec = "[[stage]]\ntype = \"active_beams\"\nbeams = {{ start = 0.0, stop = 180.0, " \
+        "count = 7 }}\nwindow_s = 1.4\n{blank}\n"
+    out = {}
+    for blank in ("", 'blank_direct = ["bpsk"]'):
+        ch = build_chain(spec.format(blank=blank))
+        with Recording(path) as rec:
+            out[blank] = {b.meta.waveform: np.array(b.data) for b in ch.stages[0].process(
+                _blocks(ch, rec))}
+    raw, bl = out[""], out['blank_direct = ["bpsk"]']
+    np.testing.assert_array_equal(raw["hfm"], bl["hfm"])
+    e = np.sum(np.abs(raw["bpsk"]) ** 2)
+    assert e > 0 and np.sum(np.abs(bl["bpsk"]) ** 2) < 1e-6 * e
+
+
+def _blocks(ch, rec):
+    """Bind the chain's first stage to ``rec`` and return the recording's time blocks."""
+    from arrayproc.chain.graph import set_rates
+    from arrayproc.chain.reader import read_blocks
+    from arrayproc.chain.stage import RunContext
+    ch.stages[0].bind(RunContext(products=None, sound_speed=rec.sound_speed, recording=rec))
+    set_rates(ch, rec.fs)
+    return read_blocks(rec, ch.block, ch.block, 0, rec.n_samples)
+
+
+def test_blank_direct_config_errors(tmp_path):
+    for bad in ('"yes"', "[]", "[1]", "1"):
+        with pytest.raises(ConfigError, match="key 'blank_direct' must be true, false or a "):
+            build_chain(CHAIN.format(blank=f"blank_direct = {bad}"))
+    path = simulate_to(tmp_path, rock=False)
+    with pytest.raises(ConfigError) as e:
+        contacts(path, tmp_path / "x.h5", 'blank_direct = ["bpks"]')
+    msg = str(e.value)
+    assert "\n" not in msg and "'bpks'" in msg and "bpsk" in msg
 
 
 def test_negative_margin_is_a_config_error():
