@@ -106,7 +106,7 @@ def batch_curve(del_path: Path, rec_path: Path, every: float
     [t_0, t_k], t_k every ``every`` s and the last row: times, positions at t_k (k, 2), and
     the solutions."""
     from arrayproc.io.recording import Recording
-    from arrayproc.track.batch.run import _solve_window, load_tma_config, read_measurements
+    from arrayproc.track.batch.run import load_tma_config, read_measurements, solve_window
 
     cfg = load_tma_config(str(TMA))
     meas = read_measurements(str(del_path), cfg)
@@ -116,7 +116,7 @@ def batch_curve(del_path: Path, rec_path: Path, every: float
     pos, sols = [], []
     with Recording(str(rec_path)) as rec:
         for tk in ends:
-            sol = _solve_window(meas, rec, cfg, float(t[0]), float(tk))
+            sol = solve_window(meas, rec, cfg, float(t[0]), float(tk))
             x = sol.state
             pos.append(x[:2] + (tk - sol.t0) * x[2:])
             sols.append(sol)

@@ -82,10 +82,11 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import Param, positive, read_toml
+from arrayproc.config import Param, positive, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
+from arrayproc.io.text import as_text
 
 from .bo_tma import solve_line_bearings
 from .compact import solve_compact
@@ -93,7 +94,7 @@ from .motion import axial_speed, nav_velocity
 from .result import TmaSolution
 from .td_tma import solve_delays
 
-__all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements"]
+__all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements", "solve_window"]
 
 
 def _non_negative(v: Any) -> str | None:
@@ -180,26 +181,15 @@ def load_tma_config(path: str) -> dict[str, Any]:
     return cfg
 
 
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def _resolve(path: str, rel_to: str) -> str:
-    if os.path.isabs(path) or os.path.exists(path):
-        return path
-    cand = os.path.join(os.path.dirname(os.path.abspath(rel_to)), path)
-    return cand if os.path.exists(cand) else path
-
-
 def _group(prod: dict, kind: str, name: str, path: str) -> tuple[str, dict]:
     if name:
         if name not in prod or name == "/":
             raise FormatError(f"{path}: no group {name!r} (tma.group)")
-        if _s(prod[name].get("kind")) != kind:
+        if as_text(prod[name].get("kind")) != kind:
             raise FormatError(f"{path}: group {name!r} is of kind "
-                              f"{_s(prod[name].get('kind'))!r}, not {kind!r}")
+                              f"{as_text(prod[name].get('kind'))!r}, not {kind!r}")
         return name, prod[name]
-    names = [n for n, g in prod.items() if n != "/" and _s(g.get("kind")) == kind]
+    names = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == kind]
     if not names:
         raise FormatError(f"{path}: no {kind} group")
     if len(names) > 1:
@@ -229,7 +219,7 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
         Also ``group`` (the name read) and ``source`` (the products' source attribute).
     """
     prod = read_products(products_path)
-    src = _s(prod["/"].get("source", ""))
+    src = as_text(prod["/"].get("source", ""))
     kind = "delays" if cfg["method"] == "delays" else "bearings"
     name, g = _group(prod, kind, cfg["group"], products_path)
     out: dict[str, Any] = {"group": name, "source": src}
@@ -292,7 +282,25 @@ def _windows(t: np.ndarray, window: float, step: float) -> list[tuple[float, flo
     return out
 
 
-def _solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) -> TmaSolution:
+def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) -> TmaSolution:
+    """One batch TMA solution over the measurements with times in [w0, w1].
+
+    Parameters
+    ----------
+    meas : dict
+        Measurements as returned by :func:`read_measurements`.
+    rec : Recording
+        The recording whose navigation and geometry place the array.
+    cfg : dict
+        TMA configuration from :func:`load_tma_config`.
+    w0, w1 : float
+        Window start and end, s (the solution's state is at ``w0``).
+
+    Returns
+    -------
+    TmaSolution
+        The estimate, its CRLB and costs, as one row of the ``tma`` product.
+    """
     t = meas["time"]
     sel = (t >= w0) & (t <= w1)
     ts = t[sel]
@@ -378,7 +386,7 @@ def run_tma(products_path: str, config_path: str, output_path: str,
     if not rec_path:
         raise ConfigError(f"{config_path}: tma.recording is needed (the products file names "
                           "no source recording)")
-    rec_path = _resolve(rec_path, products_path if not cfg["recording"] else config_path)
+    rec_path = resolve_beside(rec_path, products_path if not cfg["recording"] else config_path)
     sols = []
     with Recording(rec_path) as rec:
         for w0, w1 in _windows(meas["time"], cfg["window"], cfg["step"]):
@@ -386,7 +394,7 @@ def run_tma(products_path: str, config_path: str, output_path: str,
             if n < 5:
                 continue
             try:
-                sol = _solve_window(meas, rec, cfg, w0, w1)
+                sol = solve_window(meas, rec, cfg, w0, w1)
             except ValueError as e:
                 raise FormatError(f"{products_path}: window [{w0:g}, {w1:g}] s: {e}") from None
             sols.append(sol)
