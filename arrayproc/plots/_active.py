@@ -10,13 +10,9 @@ track at that source's position (``/truth/sources``), other targets at their sta
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
-
-def _s(v: Any) -> str:
-    return v.decode() if isinstance(v, bytes) else str(v)
+from arrayproc.io.text import as_text
 
 
 def echo_truth(rec) -> dict[str, np.ndarray] | None:
@@ -35,8 +31,8 @@ def echo_truth(rec) -> dict[str, np.ndarray] | None:
         return None
     e = rec.read_group("truth/echoes")
     sc = rec.read_group("truth/scatterers")
-    names = [_s(n) for n in sc["name"]]
-    kinds = [_s(k) for k in sc["kind"]]
+    names = [as_text(n) for n in sc["name"]]
+    kinds = [as_text(k) for k in sc["kind"]]
     pos0 = np.asarray(sc["position0"], float).reshape(-1, 3)
     srcs = {}
     if rec.has("truth/sources"):
