@@ -144,7 +144,7 @@ _KINDS = [
                                         False),
         "absolute_doppler_stbd_mps": _c("m/s", "absolute Doppler if to starboard", False),
         "snr_db": _c("dB", "peak over the CFAR threshold's noise estimate"),
-        "moving": _c("", "|absolute Doppler| above the threshold"),
+        "moving": _c("", "|absolute Doppler| above the threshold (on both sides)"),
         "waveform": _c("", "transmitted waveform name"),
         "cells": _c("", "range-Doppler cells computed for the ping", False),
     }),

@@ -197,17 +197,30 @@ def bearings(heading_deg: np.ndarray | float, cone_deg: np.ndarray) -> tuple[np.
 
 
 def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_gate: float,
-          cone_gate: float) -> np.ndarray:  # range_m: any distance (the cfar stage: c tau)
+          cone_gate: float, rate: np.ndarray | None = None,
+          rate_gate: float = np.inf) -> np.ndarray:
     """Indices of the contacts kept when one echo shows on several beams (array main lobe and
     sidelobes): greedy non-maximum suppression, strongest first; a contact is dropped when a
-    kept one lies within ``range_gate`` m and ``cone_gate`` deg.
+    kept one lies within ``range_gate`` m, ``cone_gate`` deg and ``rate_gate`` m/s of range
+    rate.
+
+    One echo seen through the main lobe and the sidelobes of several beams has the same lag
+    and the same range rate on all of them; a false alarm near the same lag has an unrelated
+    range rate. Without a range-rate gate, a false alarm on a beam loud with the direct
+    blast (higher noise, so a higher peak at the same SNR) suppresses an echo on a quiet beam
+    at nearly the same path (docs/validation/active.md, "Bracket mode").
 
     Parameters
     ----------
     range_m, cone_deg, level : (n,) ndarray
-        Candidates' range (m), cone angle (deg) and level (any increasing measure, e.g. SNR).
+        Candidates' range (m; any distance, the cfar stage passes the path c tau), cone angle
+        (deg) and level (any increasing measure, e.g. peak power).
     range_gate, cone_gate : float
         Gates, m and deg.
+    rate : (n,) ndarray, optional
+        Candidates' range rate, m/s (None: no range-rate gate).
+    rate_gate : float
+        Range-rate gate, m/s (inf: none).
 
     Returns
     -------
@@ -218,12 +231,14 @@ def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_ga
     kept: list[int] = []
     r = np.asarray(range_m, float)
     c = np.asarray(cone_deg, float)
+    v = np.zeros(r.size) if rate is None else np.asarray(rate, float)
     for i in order:
         if not np.isfinite(r[i]):
             continue
         ok = True
         for j in kept:
-            if abs(r[i] - r[j]) <= range_gate and abs(c[i] - c[j]) <= cone_gate:
+            if (abs(r[i] - r[j]) <= range_gate and abs(c[i] - c[j]) <= cone_gate
+                    and abs(v[i] - v[j]) <= rate_gate):
                 ok = False
                 break
         if ok:

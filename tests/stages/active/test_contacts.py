@@ -53,3 +53,29 @@ def test_bearings_and_merge():
                                                                            60.0]),
                     np.array([20.0, 30.0, 10.0, 15.0]), 5.0, 10.0)
     assert keep.tolist() == [1, 3, 2]
+
+
+def test_merge_range_rate_gate_keeps_a_quiet_beam_echo():
+    """The case of the direct blast (docs/validation/active.md, ping 23): a false alarm on a
+    loud beam (peak 27.4 dB, +3.73 m/s) within the path gate of the submarine's echo on a
+    quiet beam (peak -1.9 dB, -4.70 m/s). Without a range-rate gate the echo is dropped; with
+    one (0.44 m/s) it stays, and its sidelobe image (same range rate) is still folded."""
+    path = np.array([4490.0, 4497.0, 4491.0])
+    cone = np.array([94.0, 67.0, 70.0])
+    peak = 10 ** (np.array([27.4, -1.9, -8.0]) / 10)
+    rate = np.array([3.73, -4.70, -4.69])
+    assert ct.merge(path, cone, peak, 11.7, 180.0).tolist() == [0]
+    assert ct.merge(path, cone, peak, 11.7, 180.0, rate, 0.44).tolist() == [0, 1]
+
+
+def test_merge_without_rate_gate_is_the_old_merge():
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        n = int(rng.integers(1, 40))
+        path = rng.uniform(0.0, 100.0, n)
+        cone = rng.uniform(0.0, 180.0, n)
+        peak = rng.exponential(1.0, n)
+        rate = rng.uniform(-15.0, 15.0, n)
+        a = ct.merge(path, cone, peak, 8.0, 20.0)
+        np.testing.assert_array_equal(a, ct.merge(path, cone, peak, 8.0, 20.0, rate, np.inf))
+        np.testing.assert_array_equal(a, ct.merge(path, cone, peak, 8.0, 20.0, np.zeros(n), 0.1))
