@@ -197,18 +197,21 @@ def bearings(heading_deg: np.ndarray | float, cone_deg: np.ndarray) -> tuple[np.
 
 
 def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_gate: float,
-          cone_gate: float, rate: np.ndarray | None = None,
-          rate_gate: float = np.inf) -> np.ndarray:
+          cone_gate: float, rate: np.ndarray | None = None, rate_gate: float = np.inf,
+          snr: np.ndarray | None = None) -> np.ndarray:
     """Indices of the contacts kept when one echo shows on several beams (array main lobe and
-    sidelobes): greedy non-maximum suppression, strongest first; a contact is dropped when a
-    kept one lies within ``range_gate`` m, ``cone_gate`` deg and ``rate_gate`` m/s of range
-    rate.
+    sidelobes): greedy non-maximum suppression, strongest ``level`` first; a contact is
+    dropped when a kept one lies within ``range_gate`` m and ``cone_gate`` deg and either has
+    its range rate (within ``rate_gate`` m/s) or at least its SNR.
 
     One echo seen through the main lobe and the sidelobes of several beams has the same lag
-    and the same range rate on all of them; a false alarm near the same lag has an unrelated
-    range rate. Without a range-rate gate, a false alarm on a beam loud with the direct
-    blast (higher noise, so a higher peak at the same SNR) suppresses an echo on a quiet beam
-    at nearly the same path (docs/validation/active.md, "Bracket mode").
+    and the same range rate on all of them: its images are folded whatever their SNR. A
+    contact at another range rate is a different echo or a false alarm; it is folded only by
+    a kept contact of at least its SNR. With equal noise on every beam the higher peak has
+    the higher SNR and this is plain suppression on ``level``. Where the noise differs between
+    beams (the direct blast's sidelobe plateau on the beams it reaches), a false alarm on a
+    loud beam has a higher peak than an echo on a quiet one at the same path, and would
+    otherwise remove it (docs/validation/active.md, "Bracket mode").
 
     Parameters
     ----------
@@ -218,9 +221,12 @@ def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_ga
     range_gate, cone_gate : float
         Gates, m and deg.
     rate : (n,) ndarray, optional
-        Candidates' range rate, m/s (None: no range-rate gate).
+        Candidates' range rate, m/s.
     rate_gate : float
-        Range-rate gate, m/s (inf: none).
+        Range rates closer than this are the same echo's, m/s.
+    snr : (n,) ndarray, optional
+        Candidates' SNR (any increasing measure). Without ``rate`` or ``snr``: suppression on
+        the gates in range and cone alone.
 
     Returns
     -------
@@ -231,14 +237,16 @@ def merge(range_m: np.ndarray, cone_deg: np.ndarray, level: np.ndarray, range_ga
     kept: list[int] = []
     r = np.asarray(range_m, float)
     c = np.asarray(cone_deg, float)
-    v = np.zeros(r.size) if rate is None else np.asarray(rate, float)
+    both = rate is not None and snr is not None
+    v = np.asarray(rate, float) if both else None
+    q = np.asarray(snr, float) if both else None
     for i in order:
         if not np.isfinite(r[i]):
             continue
         ok = True
         for j in kept:
             if (abs(r[i] - r[j]) <= range_gate and abs(c[i] - c[j]) <= cone_gate
-                    and abs(v[i] - v[j]) <= rate_gate):
+                    and (not both or abs(v[i] - v[j]) <= rate_gate or q[j] >= q[i])):
                 ok = False
                 break
         if ok:

@@ -8,10 +8,10 @@ the closed forms). Adjacent cells form one cluster, whose peak lag and range rat
 interpolated. At the end of a ping, clusters from all beams are merged
 (one echo shows on several beams, through the array's main lobe, side lobes and, above the
 design frequency, grating lobes: greedy non-maximum suppression on the peak power, within
-``merge_range_m`` of bistatic path / 2, ``merge_cone_deg`` and ``merge_rate_mps`` of range
-rate: one echo has the same range rate on every beam, and without this gate a false alarm
-on a beam loud with the direct blast removes an echo on a quiet beam) and written as
-``contacts`` rows:
+``merge_range_m`` of bistatic path / 2 and ``merge_cone_deg``; a candidate whose range rate
+differs by more than ``merge_rate_mps`` from the kept one's is another echo, dropped only
+if the kept one has at least its SNR: otherwise a false alarm on a beam loud with the
+direct blast removes an echo on a quiet beam) and written as ``contacts`` rows:
 
 - ``time``: echo reception time t_p + tau, s; ``ping``; ``waveform`` (name, bytes);
 - ``range_m``: from the bistatic path c tau and the projector offset
@@ -84,8 +84,8 @@ class Cfar(Stage):
         "moving_threshold": Param("float", 2.0, "|absolute Doppler| above which a contact is "
                                   "moving, knots"),
         "merge_range_m": Param("float", 0.0, "merge gate in range, m (0: 4 range cells c/(2B))"),
-        "merge_rate_mps": Param("float", 0.0, "merge gate in range rate, m/s (0: 4 steps of "
-                                "the bank's range-rate grid)"),
+        "merge_rate_mps": Param("float", 0.0, "range rates closer than this are one echo's, "
+                                "m/s (0: 4 steps of the bank's range-rate grid)"),
         "merge_cone_deg": Param("float", 180.0, "merge gate in cone angle, deg (180: any "
                                 "beam, which also folds grating and side lobes)"),
         "threads": Param("int", 0, "threads over the beams of a block (0: all cores)"),
@@ -170,12 +170,12 @@ class Cfar(Stage):
         cone, tau, rate, snr, rng, peak = (v[ok] for v in (cone, tau, rate, snr, rng, peak))
         gate = self.merge_range_m if self.merge_range_m > 0 else 4 * c / (2 * m["bandwidth"])
         # one echo, one lag and one range rate on every beam: merge on the path c tau (range
-        # depends on the cone through the projector offset) and the range rate, strongest
-        # peak first
+        # depends on the cone through the projector offset), strongest peak first; a
+        # candidate at another range rate is dropped only by one of at least its SNR
         rr = m["range_rates"]
         rgate = (self.merge_rate_mps if self.merge_rate_mps > 0
                  else 4 * float(np.median(np.diff(rr))) if rr.size > 1 else np.inf)
-        keep = merge(c * tau, cone, peak, 2 * gate, self.merge_cone_deg, rate, rgate)
+        keep = merge(c * tau, cone, peak, 2 * gate, self.merge_cone_deg, rate, rgate, snr)
         cone, tau, rate, snr, rng = cone[keep], tau[keep], rate[keep], snr[keep], rng[keep]
         t_rx = b.t0 + tau
         # the beams integrate the echo over its length T: the cone is the one at the echo's

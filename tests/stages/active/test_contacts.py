@@ -55,20 +55,26 @@ def test_bearings_and_merge():
     assert keep.tolist() == [1, 3, 2]
 
 
-def test_merge_range_rate_gate_keeps_a_quiet_beam_echo():
+def test_merge_keeps_a_quiet_beam_echo():
     """The case of the direct blast (docs/validation/active.md, ping 23): a false alarm on a
-    loud beam (peak 27.4 dB, +3.73 m/s) within the path gate of the submarine's echo on a
-    quiet beam (peak -1.9 dB, -4.70 m/s). Without a range-rate gate the echo is dropped; with
-    one (0.44 m/s) it stays, and its sidelobe image (same range rate) is still folded."""
-    path = np.array([4490.0, 4497.0, 4491.0])
-    cone = np.array([94.0, 67.0, 70.0])
-    peak = 10 ** (np.array([27.4, -1.9, -8.0]) / 10)
-    rate = np.array([3.73, -4.70, -4.69])
+    loud beam (peak 27.4 dB, SNR 12.8 dB, +3.73 m/s) within the path gate of the submarine's
+    echo on a quiet beam (peak -1.9 dB, SNR 21.8 dB, -4.70 m/s). On the gates alone the echo
+    is dropped; with range rate and SNR it stays. Its sidelobe image (same range rate, lower
+    peak) is folded although its SNR is higher than the false alarm's, a weaker false alarm
+    at another range rate is folded by the echo, one at another range rate with a higher SNR
+    than the loud beam's is not."""
+    path = np.array([4490.0, 4497.0, 4491.0, 4495.0, 4494.0])
+    cone = np.array([94.0, 67.0, 70.0, 40.0, 110.0])
+    peak = 10 ** (np.array([27.4, -1.9, -8.0, -10.0, -12.0]) / 10)
+    snr = 10 ** (np.array([12.8, 21.8, 15.8, 12.4, 13.5]) / 10)
+    rate = np.array([3.73, -4.70, -4.69, 9.0, -12.0])
     assert ct.merge(path, cone, peak, 11.7, 180.0).tolist() == [0]
-    assert ct.merge(path, cone, peak, 11.7, 180.0, rate, 0.44).tolist() == [0, 1]
+    assert ct.merge(path, cone, peak, 11.7, 180.0, rate, 0.44, snr).tolist() == [0, 1]
+    snr[4] = 10 ** 2.3  # above the echo's SNR: a different, stronger-SNR echo
+    assert ct.merge(path, cone, peak, 11.7, 180.0, rate, 0.44, snr).tolist() == [0, 1, 4]
 
 
-def test_merge_without_rate_gate_is_the_old_merge():
+def test_merge_on_equal_noise_is_suppression_on_the_peak():
     rng = np.random.default_rng(7)
     for _ in range(50):
         n = int(rng.integers(1, 40))
@@ -77,5 +83,5 @@ def test_merge_without_rate_gate_is_the_old_merge():
         peak = rng.exponential(1.0, n)
         rate = rng.uniform(-15.0, 15.0, n)
         a = ct.merge(path, cone, peak, 8.0, 20.0)
-        np.testing.assert_array_equal(a, ct.merge(path, cone, peak, 8.0, 20.0, rate, np.inf))
-        np.testing.assert_array_equal(a, ct.merge(path, cone, peak, 8.0, 20.0, np.zeros(n), 0.1))
+        np.testing.assert_array_equal(a, ct.merge(path, cone, peak, 8.0, 20.0, rate, 0.44,
+                                                  peak / 0.37))
