@@ -280,8 +280,9 @@ def main() -> int:
                   f"{m['cpu_s']:.2f} s CPU / {m['wall_s']:.2f} s wall; {dense}numpy innovation"
                   f" {inn['cpu_s']:.1f} / {inn['wall_s']:.1f} s -> "
                   f"{inn['wall_s'] / m['wall_s']:.1f}x wall, {inn['cpu_s'] / m['cpu_s']:.1f}x CPU")
-        print(f"  max rel diff {r.get('max_rel_diff_dense', float('nan')):.1e}, "
-              f"{r['max_rel_diff_innovation']:.1e}")
+        dd = r.get("max_rel_diff_dense")
+        print(f"  max rel diff: dense {'skipped' if dd is None else f'{dd:.1e}'}, "
+              f"innovation {r['max_rel_diff_innovation']:.1e}")
     res["load_after"] = os.getloadavg()
     print(f"load average before {res['load_before']}, after {res['load_after']}")
     if a.json:
