@@ -274,3 +274,27 @@ def groups_of_kind(groups: Mapping[str, Mapping[str, Any]], kind_name: str) -> l
     list of str
     """
     return [n for n, g in groups.items() if n != "/" and g.get("kind") == kind_name]
+
+
+def markdown_table() -> str:
+    """The products table of docs/formats.md, made from the declarations above.
+
+    Returns
+    -------
+    str
+        A Markdown table: kind, one row per, columns (required plain, optional in italics, each
+        with its unit) and axes; one line per kind, in declaration order.
+    """
+    def cells(cols: Mapping[str, Column]) -> str:
+        out = []
+        for n, c in cols.items():
+            name = f"`{n}`" if c.required else f"*`{n}`*"
+            out.append(f"{name} {c.unit}".rstrip())
+        return ", ".join(out) if out else "—"
+
+    lines = ["| kind | one row per | columns (required; *optional*) | axes |",
+             "| --- | --- | --- | --- |"]
+    for k in KINDS.values():
+        axes = ", ".join(f"`{n}`" for n in k.axes) if k.axes else "—"
+        lines.append(f"| `{k.name}` | {k.row} | {cells(k.columns)} | {axes} |")
+    return "\n".join(lines)
