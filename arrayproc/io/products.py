@@ -212,3 +212,46 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
             check_group(name, d, str(path))
             out[name] = d
         return out
+
+
+def delays_columns(group: dict, path: str) -> dict[str, Any]:
+    """The rows of a ``delays`` group, checked and sorted by time.
+
+    Parameters
+    ----------
+    group : dict
+        The group as returned by :func:`read_products`.
+    path : str
+        Products file, for the messages.
+
+    Returns
+    -------
+    dict
+        ``time`` (n,) s, ``tau`` (n, n_ch) s, ``sigma`` and ``corr`` (n, n_ch) or None when the
+        group has no such column, ``reference`` (the reference channel, attribute, default 0)
+        and ``order`` (the permutation that sorted the rows by time, stable).
+
+    Raises
+    ------
+    FormatError
+        A column is missing or shaped unlike ``tau`` (n, n_ch).
+    """
+    for k in ("time", "tau"):
+        if k not in group:
+            raise FormatError(f"{path}: delays column {k!r} is missing")
+    t = np.asarray(group["time"], float).reshape(-1)
+    tau = np.asarray(group["tau"], float)
+    if tau.ndim != 2 or tau.shape[0] != t.size:
+        raise FormatError(f"{path}: delays 'tau' must be (n, n_ch) with n = {t.size}")
+    order = np.argsort(t, kind="stable")
+    out: dict[str, Any] = {"time": t[order], "tau": tau[order], "order": order,
+                           "reference": int(group.get("attrs", {}).get("reference", 0))}
+    for k in ("sigma", "corr"):
+        v = None
+        if k in group:
+            v = np.asarray(group[k], float)
+            if v.shape != tau.shape:
+                raise FormatError(f"{path}: delays {k!r} shape {v.shape} != tau {tau.shape}")
+            v = v[order]
+        out[k] = v
+    return out

@@ -599,7 +599,7 @@ def read_delays(products_path: str, group: str = "") -> dict[str, Any]:
     -------
     dict
     """
-    from arrayproc.io.products import read_products
+    from arrayproc.io.products import delays_columns, read_products
 
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
@@ -616,28 +616,9 @@ def read_delays(products_path: str, group: str = "") -> dict[str, Any]:
                           "choose one with tracker.delays.group")
     else:
         name = names[0]
-    g = prod[name]
-    for k in ("time", "tau"):
-        if k not in g:
-            raise FormatError(f"{products_path}: delays column {k!r} is missing")
-    t = np.asarray(g["time"], float).reshape(-1)
-    tau = np.asarray(g["tau"], float)
-    if tau.ndim != 2 or tau.shape[0] != t.size:
-        raise FormatError(f"{products_path}: delays 'tau' must be (n, n_ch) with n = {t.size}")
-    opt = {}
-    for k in ("sigma", "corr"):
-        if k in g:
-            v = np.asarray(g[k], float)
-            if v.shape != tau.shape:
-                raise FormatError(f"{products_path}: delays {k!r} shape {v.shape} != tau "
-                                  f"{tau.shape}")
-            opt[k] = v
-    order = np.argsort(t, kind="stable")
-    return {"time": t[order], "tau": tau[order],
-            "sigma": opt["sigma"][order] if "sigma" in opt else None,
-            "corr": opt["corr"][order] if "corr" in opt else None,
-            "reference": int(g.get("attrs", {}).get("reference", 0)), "group": name,
-            "source": as_text(prod["/"].get("source", "")), "order": order}
+    d = delays_columns(prod[name], products_path)
+    d.update(group=name, source=as_text(prod["/"].get("source", "")))
+    return d
 
 
 def run_delays(products_path: str, config_path: str, out_path: str,

@@ -84,7 +84,7 @@ import numpy as np
 
 from arrayproc.config import Param, positive, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
-from arrayproc.io.products import ProductsWriter, read_products
+from arrayproc.io.products import ProductsWriter, delays_columns, read_products
 from arrayproc.io.recording import Recording
 from arrayproc.io.text import as_text
 
@@ -224,21 +224,8 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
     name, g = _group(prod, kind, cfg["group"], products_path)
     out: dict[str, Any] = {"group": name, "source": src}
     if kind == "delays":
-        for k in ("time", "tau"):
-            if k not in g:
-                raise FormatError(f"{products_path}: delays column {k!r} is missing")
-        t = np.asarray(g["time"], float).reshape(-1)
-        tau = np.asarray(g["tau"], float)
-        if tau.ndim != 2 or tau.shape[0] != t.size:
-            raise FormatError(f"{products_path}: delays 'tau' must be (n, n_ch) with n = "
-                              f"{t.size}")
-        sig = np.asarray(g["sigma"], float) if "sigma" in g else None
-        if sig is not None and sig.shape != tau.shape:
-            raise FormatError(f"{products_path}: delays 'sigma' shape {sig.shape} != tau "
-                              f"{tau.shape}")
-        order = np.argsort(t, kind="stable")
-        out.update(time=t[order], tau=tau[order], sigma=None if sig is None else sig[order],
-                   reference=int(g["attrs"].get("reference", 0)))
+        d = delays_columns(g, products_path)
+        out.update(time=d["time"], tau=d["tau"], sigma=d["sigma"], reference=d["reference"])
         return out
     for k in ("time", "bearing_port_deg", "bearing_stbd_deg"):
         if k not in g:
