@@ -1,15 +1,24 @@
 # Every target does its own set-up on a fresh machine.
-PYTHON ?= python3
-VENV   := .venv
-PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.installed-stamp
+#
+# `make test` / `make demo` install from requirements.lock (exact versions of every dependency,
+# all extras, markers for Python 3.10-3.13), so a fresh clone gets the releases the suite was
+# run with. `make lock` refreshes both lock files; `make test-latest` ignores the lock and runs
+# the suite on the newest releases; `make test-oldest` runs it on Python 3.10 with the oldest
+# releases pyproject.toml admits (its floors), from requirements-oldest.lock.
+PYTHON    ?= python3
+PYTHON310 ?= python3.10
+EXTRAS    := test,fast,dask,stonesoup
+VENV      := .venv
+PY        := $(VENV)/bin/python
+STAMP     := $(VENV)/.installed-stamp
+LOCK      := requirements.lock
+OLDEST    := requirements-oldest.lock
 
-.PHONY: install test test-slow demo lint bench clean
+.PHONY: install test test-slow test-latest test-oldest lock demo lint bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,fast,dask,stonesoup]'
+	$(PY) -m pip install --quiet --constraint $(LOCK) -e '.[$(EXTRAS)]'
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -26,5 +35,28 @@ demo: install
 lint: install
 	$(VENV)/bin/ruff check .
 
+# The newest releases of everything, ignoring the lock (docs/testing.md).
+test-latest:
+	$(PYTHON) -m venv .venv-latest
+	.venv-latest/bin/python -m pip install --quiet --upgrade pip
+	.venv-latest/bin/python -m pip install --quiet --upgrade --upgrade-strategy eager -e '.[$(EXTRAS)]'
+	.venv-latest/bin/python -m pip list --format=freeze | grep -iE '^(numpy|scipy|numba|h5py)=='
+	.venv-latest/bin/python -m pytest -q
+
+# Python 3.10 with the floors of pyproject.toml (numpy, scipy, numba, h5py ... at their lowest).
+test-oldest:
+	@command -v $(PYTHON310) >/dev/null || { echo "make: $(PYTHON310) not found (set PYTHON310=...)"; exit 2; }
+	$(PYTHON310) -m venv .venv-oldest
+	.venv-oldest/bin/python -m pip install --quiet --requirement $(OLDEST) -e .
+	.venv-oldest/bin/python -m pytest -q -p no:cacheprovider
+
+# Refresh both lock files (uv resolves for every supported Python at once).
+lock: install
+	$(PY) -m pip install --quiet uv
+	$(VENV)/bin/uv pip compile pyproject.toml --all-extras --universal --python-version 3.10 \
+	    --upgrade --quiet -o $(LOCK)
+	$(VENV)/bin/uv pip compile pyproject.toml --extra test --extra fast --extra dask \
+	    --extra stonesoup --resolution lowest-direct --python-version 3.10 --quiet -o $(OLDEST)
+
 clean:
-	rm -rf $(VENV) demo_out build *.egg-info
+	rm -rf $(VENV) .venv-latest .venv-oldest demo_out build *.egg-info

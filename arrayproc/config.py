@@ -17,8 +17,8 @@ from arrayproc.errors import ConfigError
 
 try:  # Python 3.11+
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    pass  # type: ignore[no-redef]
+except ModuleNotFoundError:  # Python 3.10: the same parser, published as tomli
+    import tomli as tomllib  # type: ignore[no-redef]
 
 _REQUIRED = object()
 

@@ -170,8 +170,14 @@ def _quiet_unraisable(hook):
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    if issubclass(category, (DeprecationWarning, PendingDeprecationWarning)) and \
+            _PACKAGE_DIR not in os.path.abspath(filename):
+        return  # another library's notice to its own callers, not to the user of the CLI
     text = " ".join(str(message).split())
     print(f"arrayproc: warning: {text}", file=sys.stderr)
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _run(args: argparse.Namespace) -> int:
