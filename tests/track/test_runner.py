@@ -15,6 +15,7 @@ from arrayproc.evaluate.montecarlo import LRScenario
 from arrayproc.geo.angles import wrap_pi
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.track.runner import assign_by_continuity, load_tracker_config, run_tracker
+from tests._tolerance import assert_close_to_scale
 
 DATA = str(data_path("trackers"))
 
@@ -132,7 +133,7 @@ def test_assign_by_continuity_follows_a_turn_through_the_target():
 @pytest.mark.parametrize("name", ["ekf", "ukf", "srf"])
 def test_runner_components_equal_the_fused_kernel(name):
     """The runner's wiring (filter objects, bearing model, LRResolver) and the fused L-R
-    Monte Carlo kernel compute the same numbers, bit for bit."""
+    Monte Carlo kernel compute the same numbers, to rounding."""
     from arrayproc.track.filters import make_filter
     from arrayproc.track.init import TrackPrior
     from arrayproc.track.manage import _kernels as kl
@@ -157,9 +158,10 @@ def test_runner_components_equal_the_fused_kernel(name):
                        math.radians(cfg["sigma_bearing_deg"]), cfg["q1"], cfg["q2"], p,
                        np.array([p[0], p[2], 0.0]), *filt.kernel_points(4), kx, kP, kw)
     assert st == kst
-    np.testing.assert_array_equal(xs, kx)
-    np.testing.assert_array_equal(Ps, kP)
-    np.testing.assert_array_equal(ws, kw)
+    # two compiled paths of one recursion: rounding only, 1e-10 of scale (RECURSION_REL)
+    assert_close_to_scale(xs, kx, err_msg="state")
+    assert_close_to_scale(Ps, kP, err_msg="covariance")
+    assert_close_to_scale(ws, kw, err_msg="weights")
 
 
 def test_cone_gate_selects_rows_and_is_validated(tmp_path):

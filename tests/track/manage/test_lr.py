@@ -15,6 +15,7 @@ from arrayproc.track.manage.lr import LRResolver, fused_kind
 from arrayproc.track.models.bearing import Bearing
 from arrayproc.track.models.motion import make_model
 from arrayproc.track.state import Context, GaussianState
+from tests._tolerance import assert_close_to_scale
 
 FILTERS = ["ekf", "ukf", "ckf", "ghf", "srf"]
 
@@ -53,7 +54,7 @@ def test_weights_and_combination_eqs_10_to_13():
 @pytest.mark.parametrize("case", [1, 2])
 def test_kernel_lr_run_equals_python_resolver(name, case):
     """The fused Monte Carlo kernel (:func:`run_track`) and the per-step filter objects +
-    LRResolver run the same kernels: bit-identical weights, estimates and covariances."""
+    LRResolver compute the same weights, estimates and covariances, to rounding."""
     scn = LRScenario(case=case)
     g = scn.geometry()
     y1, y2, draws, _ = scn.measurements(1, 11)
@@ -82,9 +83,10 @@ def test_kernel_lr_run_equals_python_resolver(name, case):
         lr.step(g["times"][k] - g["times"][k - 1], Context(g["own"][k], g["own"][k - 1]),
                 [y1[0, k], y2[0, k]])
         x, P, w = lr.combine()
-        np.testing.assert_array_equal(ws[k], w)
-        np.testing.assert_array_equal(xs[k], x)
-        np.testing.assert_array_equal(Ps[k], P)
+        # two compiled paths of one recursion: rounding only, 1e-10 of scale (RECURSION_REL)
+        assert_close_to_scale(w, ws[k], err_msg=f"weights, step {k}")
+        assert_close_to_scale(x, xs[k], err_msg=f"state, step {k}")
+        assert_close_to_scale(P, Ps[k], err_msg=f"covariance, step {k}")
 
 
 def test_ghost_dies_after_the_ownship_turn():
