@@ -52,19 +52,36 @@ def _describe_products(path: str) -> list[str]:
                  f"  source: {_attr_str(a.get('source', ''))}"]
         for name in f:
             g = get_object(f, Path(path), name)
-            if not isinstance(g, h5py.Group):
-                continue
-            cols = []
-            rows = 0
-            for k in g:
-                d = get_object(f, Path(path), f"{name}/{k}")
-                if isinstance(d, h5py.Dataset):
-                    cols.append(k)
-                    if d.ndim:
-                        rows = max(rows, int(d.shape[0]))
-            lines.append(f"  {name}: kind={_attr_str(g.attrs.get('kind', ''))} rows={rows} "
-                         f"datasets={', '.join(cols)}")
+            if isinstance(g, h5py.Group):
+                lines.append(_group_line(f, path, name, g))
     return lines
+
+
+def _group_line(f: h5py.File, path: str, name: str, g: h5py.Group) -> str:
+    """``name: kind=K rows=N columns=… axes=a (n), …`` for one products group.
+
+    Rows are the length of the kind's row columns (:mod:`arrayproc.io.schema`); the axes (e.g.
+    ``cone_deg`` of a BTR) are static datasets whose length is the axis length, not a row
+    count. For a kind this version does not know, every dataset is taken for a column.
+    """
+    from arrayproc.io.schema import KINDS
+    k_name = _attr_str(g.attrs.get("kind", ""))
+    k = KINDS.get(k_name)
+    cols, axes, rows = [], [], set()
+    for key in g:
+        d = get_object(f, Path(path), f"{name}/{key}")
+        if not isinstance(d, h5py.Dataset):
+            continue
+        n = int(d.shape[0]) if d.ndim else 1
+        if k is not None and key in k.axes and key not in k.columns:
+            axes.append(f"{key} ({n})")
+        else:
+            cols.append(key)
+            rows.add(n)
+    n_rows = "0" if not rows else str(max(rows)) if len(rows) == 1 else \
+        f"{min(rows)}-{max(rows)} (columns of unequal length)"
+    line = f"  {name}: kind={k_name} rows={n_rows} columns={', '.join(cols) or 'none'}"
+    return line + (f" axes={', '.join(axes)}" if axes else "")
 
 
 def _describe_recording(path: str, positions: Any) -> list[str]:

@@ -10,7 +10,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
-from arrayproc.errors import ConfigError
+from arrayproc.dsp.bands import check_nyquist
 
 
 @register
@@ -31,9 +31,7 @@ class Power(Stage):
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
-        if self.band is not None and self.fs_in > 0 and self.band[0] >= self.fs_in / 2:
-            raise ConfigError(f"stage {self.name!r}: key 'band': {self.band} Hz lies above the "
-                              f"Nyquist frequency {self.fs_in / 2:g} Hz of its input")
+        check_nyquist(self.band, self.fs_in / 2, f"stage {self.name!r}")
         out = self.products("power")
         for b in blocks:
             n_valid = b.meta.n_valid
