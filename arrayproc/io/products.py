@@ -17,7 +17,7 @@ import numpy as np
 from arrayproc.errors import FormatError
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.recording import open_h5
-from arrayproc.io.schema import check_columns, check_group
+from arrayproc.io.schema import KINDS, check_columns, check_group, empty_columns
 from arrayproc.io.schema import kind as schema_kind
 from arrayproc.io.text import as_text
 
@@ -61,6 +61,16 @@ class GroupWriter:
         d = self._g.create_dataset(name, data=np.asarray(data))
         for k, v in attrs.items():
             d.attrs[k] = v
+
+    def fill_empty(self) -> None:
+        """A group that received no rows gets every required column of its kind with 0 rows
+        and the declared dtype (:func:`arrayproc.io.schema.empty_columns`): a stage that
+        found nothing writes a valid empty table, not a group without columns."""
+        if self.kind is None or self.n_rows > 0:
+            return
+        for k, v in empty_columns(self.kind).items():
+            if k not in self._g:  # contiguous: nothing is appended after the run
+                self._g.create_dataset(k, data=v)
 
     def append(self, **columns: np.ndarray) -> None:
         """Append rows: every column has the same length along its first axis."""
@@ -139,6 +149,8 @@ class ProductsWriter(AtomicH5Writer):
         return w
 
     def _finish(self) -> None:
+        for w in self._groups.values():
+            w.fill_empty()
         self._f.attrs["complete"] = True  # only a finished run is marked complete
 
 
@@ -210,8 +222,20 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
                 if isinstance(v, h5py.Dataset):
                     d[k] = v[()]
             check_group(name, d, str(path))
+            _fill_empty_group(d)
             out[name] = d
         return out
+
+
+def _fill_empty_group(d: dict[str, Any]) -> None:
+    """A group of a declared kind with no column at all (what a stage that found nothing
+    wrote before empty groups were filled on writing) is read as the empty table of its
+    kind."""
+    k = KINDS.get(as_text(d["kind"]))
+    if k is None or any(c in d for c in k.columns):
+        return
+    for c, v in empty_columns(k.name).items():
+        d[c] = v
 
 
 def delays_columns(group: dict, path: str) -> dict[str, Any]:
