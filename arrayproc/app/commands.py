@@ -171,7 +171,9 @@ def import_wavs(wavs: Sequence[str], output: str, positions: Any = None,
     Parameters
     ----------
     wavs : list of str
-        One multichannel WAV or one mono WAV per hydrophone (channel order = file order).
+        One multichannel WAV or one mono WAV per hydrophone (channels in the natural order of
+        the names, hyd2 before hyd10, with a notice when that is not the order given; an
+        ambiguous order is refused: :func:`arrayproc.io.wav.channel_order`).
     output : str
         Recording HDF5 file to write.
     positions : (n, 3) array, optional
@@ -630,7 +632,8 @@ def add_parser(sub: Any) -> None:
     s.set_defaults(func=_run_process)
 
     s = sub.add_parser("import", help="turn WAV field recordings into a recording file")
-    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone")
+    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone "
+                   "(channels in the natural order of the names: hyd2 before hyd10)")
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--scale", type=float, default=None,
                    help="pascals per full scale (default: store full-scale units)")
