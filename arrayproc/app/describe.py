@@ -15,6 +15,7 @@ import h5py
 
 from arrayproc.errors import FormatError
 from arrayproc.io.recording import _attr_str, get_object, open_h5
+from arrayproc.io.units import file_units, level_label
 
 #: Geometry summaries (line / planar / volumetric, aperture) up to this many elements.
 MAX_GEOMETRY_ELEMENTS = 100_000
@@ -49,7 +50,8 @@ def _describe_products(path: str) -> list[str]:
         lines = [f"{path}: arrayproc products, format version "
                  f"{_attr_str(a.get('format_version', '?'))}, complete="
                  f"{_attr_str(a.get('complete', False))}",
-                 f"  source: {_attr_str(a.get('source', ''))}"]
+                 f"  source: {_attr_str(a.get('source', ''))}",
+                 f"  units: {file_units(a)} (levels in {level_label(file_units(a))})"]
         for name in f:
             g = get_object(f, Path(path), name)
             if isinstance(g, h5py.Group):

@@ -353,11 +353,17 @@ def run_single(products_path: str, config_path: str, out_path: str,
                progress: bool = False) -> None:
     """``arrayproc track`` with a single-target tracker (see the module doc)."""
     from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.io.units import PASCAL, file_units, level_label
 
     cfg = load_single_config(config_path)
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
+    units = file_units(prod["/"])
+    if cfg.get("level") and units != PASCAL:
+        raise ConfigError(f"{config_path}: tracker.level uses received levels in dB re 1 µPa, "
+                          f"but {products_path} holds levels in {level_label(units)} (a "
+                          "recording imported without --scale)")
     b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"),
                        cfg.get("level"))
     cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
