@@ -50,8 +50,9 @@ def _describe_products(path: str) -> list[str]:
         lines = [f"{path}: arrayproc products, format version "
                  f"{_attr_str(a.get('format_version', '?'))}, complete="
                  f"{_attr_str(a.get('complete', False))}",
-                 f"  source: {_attr_str(a.get('source', ''))}",
-                 f"  units: {file_units(a)} (levels in {level_label(file_units(a))})"]
+                 f"  source: {_attr_str(a.get('source', ''))}"]
+        if "units" in a:  # the recording's sample unit, which the levels follow
+            lines.append(f"  units: {file_units(a)} (levels in {level_label(file_units(a))})")
         for name in f:
             g = get_object(f, Path(path), name)
             if isinstance(g, h5py.Group):

@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 
 from arrayproc.io.geometry import line_array
-from arrayproc.stages.beamform.checks import (typical_spacing, warn_cone_geometry,
-                                              warn_spatial_aliasing)
+from arrayproc.stages.beamform.checks import (
+    typical_spacing,
+    warn_cone_geometry,
+    warn_spatial_aliasing,
+)
 
 
 def test_spacing_of_a_line_is_its_uniform_spacing():
