@@ -13,6 +13,7 @@ from typing import Any
 from arrayproc import chain as _chain
 from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError
+from arrayproc.stages import TYPES, load_all
 from arrayproc.stages import load as _load
 
 
@@ -57,11 +58,17 @@ def load_chain(path: str) -> _chain.ChainSpec:
 
 
 def _load_types(config: Any) -> None:
-    """Import only the stage modules the chain names (start-up stays short)."""
+    """Import only the stage modules the chain names (start-up stays short); when it names a
+    type no module defines, import them all, so the chain builder's refusal lists every known
+    type, not only those loaded so far."""
     tables = config.get("stage", []) if isinstance(config, Mapping) else []
     if isinstance(tables, list):
-        _load(t.get("type") for t in tables
-              if isinstance(t, Mapping) and isinstance(t.get("type"), str))
+        types = [t.get("type") for t in tables
+                 if isinstance(t, Mapping) and isinstance(t.get("type"), str)]
+        if any(t not in TYPES for t in types):
+            load_all()
+        else:
+            _load(types)
 
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,

@@ -171,7 +171,9 @@ def import_wavs(wavs: Sequence[str], output: str, positions: Any = None,
     Parameters
     ----------
     wavs : list of str
-        One multichannel WAV or one mono WAV per hydrophone (channel order = file order).
+        One multichannel WAV or one mono WAV per hydrophone (channels in the natural order of
+        the names, hyd2 before hyd10, with a notice when that is not the order given; an
+        ambiguous order is refused: :func:`arrayproc.io.wav.channel_order`).
     output : str
         Recording HDF5 file to write.
     positions : (n, 3) array, optional
@@ -327,9 +329,10 @@ def check_plot_input(path: str, kind: str) -> None:
     check_product_input(path, kind, PLOT_INPUTS[kind])
 
 
-def check_product_input(path: str, use: str, spec: tuple) -> None:
+def check_product_input(path: str, use: str, spec: tuple, empty_ok: bool = False) -> None:
     """Refuse a products file whose groups of ``spec``'s kind lack a numeric column of the
-    declared dimensions, have no rows, or axes that do not match (see :data:`PLOT_INPUTS`);
+    declared dimensions, have no rows (unless ``empty_ok``: a reader such as the tracker for
+    which no rows is a valid input), or axes that do not match (see :data:`PLOT_INPUTS`);
     ``use`` names the reader in the message."""
     import h5py
 
@@ -348,6 +351,8 @@ def check_product_input(path: str, use: str, spec: tuple) -> None:
             g = f[name]
             where = f"{path}: group {name!r} (kind {pkind!r})"
             rows = set()
+            if empty_ok and not any(isinstance(g.get(c), h5py.Dataset) for c in cols):
+                continue  # no column at all: an older file's empty group, read as empty
             for col, ndim in cols.items():
                 d = get_object(f, Path(path), f"{name}/{col}")
                 if not isinstance(d, h5py.Dataset):
@@ -361,7 +366,7 @@ def check_product_input(path: str, use: str, spec: tuple) -> None:
                 rows.add(d.shape[0])
             if len(rows) != 1:
                 raise FormatError(f"{where}: columns have different numbers of rows {rows}")
-            if rows == {0}:
+            if rows == {0} and not empty_ok:
                 raise FormatError(f"{where}: has 0 rows; nothing to plot")
             main = next(c for c, n in cols.items() if n >= 2) if any(
                 n >= 2 for n in cols.values()) else None
@@ -416,7 +421,7 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     from arrayproc.track.runner import load_tracker_config
     cfg = load_tracker_config(config)  # configuration errors first, before the products are read
     if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
-        check_product_input(products, "the tracker", TRACK_INPUT)
+        check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
     from arrayproc.track.runner import run_tracker
     run_tracker(products, config, output, progress=progress)
 
@@ -570,8 +575,25 @@ def _run_plot(args: argparse.Namespace) -> int:
 
 def _run_track(args: argparse.Namespace) -> int:
     track(args.products, args.config, args.output, progress=progress_wanted(args))
-    print(f"{args.output}: tracks written")
+    print(f"{args.output}: {_tracks_summary(args.output)}")
     return 0
+
+
+def _tracks_summary(path: str) -> str:
+    """``N track(s), M points written`` (``no tracks (no measurements), empty table written``
+    for an empty result), read from the tracks file just written."""
+    import numpy as np
+
+    from arrayproc.io.products import read_products
+    from arrayproc.io.schema import groups_of_kind
+    prod = read_products(path)
+    ids = [np.asarray(prod[n]["track_id"]).reshape(-1) for n in groups_of_kind(prod, "tracks")
+           if "track_id" in prod[n]]
+    n_pts = sum(i.size for i in ids)
+    if n_pts == 0:
+        return "no tracks (no measurements to track), empty tracks table written"
+    n_tr = sum(np.unique(i).size for i in ids)
+    return f"{n_tr} track(s), {n_pts} points written"
 
 
 def _run_tma(args: argparse.Namespace) -> int:
@@ -610,7 +632,8 @@ def add_parser(sub: Any) -> None:
     s.set_defaults(func=_run_process)
 
     s = sub.add_parser("import", help="turn WAV field recordings into a recording file")
-    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone")
+    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone "
+                   "(channels in the natural order of the names: hyd2 before hyd10)")
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--scale", type=float, default=None,
                    help="pascals per full scale (default: store full-scale units)")

@@ -15,6 +15,7 @@ import h5py
 
 from arrayproc.errors import FormatError
 from arrayproc.io.recording import _attr_str, get_object, open_h5
+from arrayproc.io.units import file_units, level_label
 
 #: Geometry summaries (line / planar / volumetric, aperture) up to this many elements.
 MAX_GEOMETRY_ELEMENTS = 100_000
@@ -50,21 +51,40 @@ def _describe_products(path: str) -> list[str]:
                  f"{_attr_str(a.get('format_version', '?'))}, complete="
                  f"{_attr_str(a.get('complete', False))}",
                  f"  source: {_attr_str(a.get('source', ''))}"]
+        if "units" in a:  # the recording's sample unit, which the levels follow
+            lines.append(f"  units: {file_units(a)} (levels in {level_label(file_units(a))})")
         for name in f:
             g = get_object(f, Path(path), name)
-            if not isinstance(g, h5py.Group):
-                continue
-            cols = []
-            rows = 0
-            for k in g:
-                d = get_object(f, Path(path), f"{name}/{k}")
-                if isinstance(d, h5py.Dataset):
-                    cols.append(k)
-                    if d.ndim:
-                        rows = max(rows, int(d.shape[0]))
-            lines.append(f"  {name}: kind={_attr_str(g.attrs.get('kind', ''))} rows={rows} "
-                         f"datasets={', '.join(cols)}")
+            if isinstance(g, h5py.Group):
+                lines.append(_group_line(f, path, name, g))
     return lines
+
+
+def _group_line(f: h5py.File, path: str, name: str, g: h5py.Group) -> str:
+    """``name: kind=K rows=N columns=… axes=a (n), …`` for one products group.
+
+    Rows are the length of the kind's row columns (:mod:`arrayproc.io.schema`); the axes (e.g.
+    ``cone_deg`` of a BTR) are static datasets whose length is the axis length, not a row
+    count. For a kind this version does not know, every dataset is taken for a column.
+    """
+    from arrayproc.io.schema import KINDS
+    k_name = _attr_str(g.attrs.get("kind", ""))
+    k = KINDS.get(k_name)
+    cols, axes, rows = [], [], set()
+    for key in g:
+        d = get_object(f, Path(path), f"{name}/{key}")
+        if not isinstance(d, h5py.Dataset):
+            continue
+        n = int(d.shape[0]) if d.ndim else 1
+        if k is not None and key in k.axes and key not in k.columns:
+            axes.append(f"{key} ({n})")
+        else:
+            cols.append(key)
+            rows.add(n)
+    n_rows = "0" if not rows else str(max(rows)) if len(rows) == 1 else \
+        f"{min(rows)}-{max(rows)} (columns of unequal length)"
+    line = f"  {name}: kind={k_name} rows={n_rows} columns={', '.join(cols) or 'none'}"
+    return line + (f" axes={', '.join(axes)}" if axes else "")
 
 
 def _describe_recording(path: str, positions: Any) -> list[str]:

@@ -10,6 +10,7 @@ from arrayproc.chain.graph import ChainSpec, compose, drive, set_rates
 from arrayproc.chain.reader import count_blocks, read_blocks
 from arrayproc.chain.segments import warmup_margin
 from arrayproc.chain.stage import RunContext
+from arrayproc.io.units import recording_units
 
 
 def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
@@ -23,6 +24,8 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
     if log is not None:
         ctx.log = log
+    if products is not None and hasattr(products, "set_units"):
+        products.set_units(recording_units(recording))  # levels are labelled from it
     for s in spec.stages:
         s.bind(ctx)
     fs = recording.fs

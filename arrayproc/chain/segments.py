@@ -212,7 +212,9 @@ def merge_products(parts: Sequence[str | os.PathLike], output: str | os.PathLike
         names: list[str] = []
         for f in files:
             names += [n for n, g in f.items() if isinstance(g, h5py.Group) and n not in names]
-        with ProductsWriter(output, source=source, chain=chain) as out:
+        units = files[0].attrs.get("units") if files else None
+        with ProductsWriter(output, source=source, chain=chain,
+                            attrs=None if units is None else {"units": units}) as out:
             for name in names:
                 have = [(p, f[name]) for p, f in zip(parts, files) if name in f]
                 _merge_group(name, have, out)
@@ -248,6 +250,9 @@ def _merge_group(name: str, have: list[tuple[Any, h5py.Group]], out: Any) -> Non
                 static[k] = d[()]
                 w.set(k, static[k], **dict(d.attrs))
     if rows:
+        # a segment that found nothing holds its kind's empty table, whose trailing sizes
+        # (channels, beams) may be 0: only segments with rows are joined
+        rows = {k: [a for a in v if a.shape[0]] or v[:1] for k, v in rows.items()}
         cols = {k: np.concatenate(v) if len(v) > 1 else v[0] for k, v in rows.items()}
         if len({v.shape[0] for v in cols.values()}) != 1:
             raise FormatError(f"group {name!r}: segments give columns of unequal length")

@@ -19,6 +19,16 @@ def band_bins(freqs: np.ndarray, band: list[float] | None, where: str) -> np.nda
     return idx
 
 
+def check_nyquist(band: list[float] | tuple[float, float] | None, nyquist: float,
+                  where: str) -> None:
+    """Refuse a ``band`` whose upper edge lies above the highest frequency of the input
+    (``nyquist``: fs/2 for real samples, fc + fs/2 for complex baseband), instead of clipping
+    it silently: ConfigError naming the key."""
+    if band is not None and nyquist > 0 and band[1] > nyquist * (1 + 1e-12):
+        raise ConfigError(f"{where}: key 'band' upper edge {band[1]:g} Hz is above the Nyquist "
+                          f"frequency {nyquist:g} Hz of its input")
+
+
 def band_slice(nfft: int, fs: float, band: tuple[float, float] | None) -> tuple[int, int]:
     """First and one-past-last rfft bin of ``band`` (Hz) for an ``nfft``-point transform.
 

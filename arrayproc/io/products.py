@@ -17,7 +17,7 @@ import numpy as np
 from arrayproc.errors import FormatError
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.recording import open_h5
-from arrayproc.io.schema import check_columns, check_group
+from arrayproc.io.schema import KINDS, check_columns, check_group, empty_columns
 from arrayproc.io.schema import kind as schema_kind
 from arrayproc.io.text import as_text
 
@@ -62,6 +62,27 @@ class GroupWriter:
         for k, v in attrs.items():
             d.attrs[k] = v
 
+    def _create(self, name: str, v: np.ndarray) -> None:
+        """A row column of ``v``'s dtype and row shape, resizable along the rows (also along
+        a dimension of size 0: the empty table of a kind whose sizes the data sets)."""
+        row = v.shape[1:]
+        row_bytes = max(1, int(np.prod(row)) * v.dtype.itemsize)
+        chunk_rows = max(1, min(4096, CHUNK_BYTES // row_bytes))
+        self._g.create_dataset(
+            name, shape=(0,) + row, maxshape=(None,) + tuple(n or None for n in row),
+            dtype=v.dtype, chunks=(chunk_rows,) + tuple(max(1, n) for n in row),
+            compression="gzip", compression_opts=1, shuffle=True)
+
+    def fill_empty(self) -> None:
+        """A group that received no rows gets every required column of its kind with 0 rows
+        and the declared dtype (:func:`arrayproc.io.schema.empty_columns`): a stage that
+        found nothing writes a valid empty table, not a group without columns."""
+        if self.kind is None or self.n_rows > 0:
+            return
+        for k, v in empty_columns(self.kind).items():
+            if k not in self._g:
+                self._create(k, v)
+
     def append(self, **columns: np.ndarray) -> None:
         """Append rows: every column has the same length along its first axis."""
         check_stop()
@@ -83,12 +104,7 @@ class GroupWriter:
             return
         for k, v in cols.items():
             if k not in self._g:
-                row_bytes = max(1, int(np.prod(v.shape[1:])) * v.dtype.itemsize)
-                chunk_rows = max(1, min(4096, CHUNK_BYTES // row_bytes))
-                self._g.create_dataset(
-                    k, shape=(0,) + v.shape[1:], maxshape=(None,) + v.shape[1:],
-                    dtype=v.dtype, chunks=(chunk_rows,) + v.shape[1:], compression="gzip",
-                    compression_opts=1, shuffle=True)
+                self._create(k, v)
             d = self._g[k]
             if d.shape[1:] != v.shape[1:]:
                 raise ValueError(f"column {k}: row shape {v.shape[1:]} != {d.shape[1:]}")
@@ -138,7 +154,14 @@ class ProductsWriter(AtomicH5Writer):
         self._groups[name] = w
         return w
 
+    def set_units(self, units: str) -> None:
+        """Root attribute ``units``: the sample unit of the recording the products come from
+        (``"Pa"``, ``"FS"``; :mod:`arrayproc.io.units`), which every level label follows."""
+        self._f.attrs["units"] = str(units)
+
     def _finish(self) -> None:
+        for w in self._groups.values():
+            w.fill_empty()
         self._f.attrs["complete"] = True  # only a finished run is marked complete
 
 
@@ -210,8 +233,20 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
                 if isinstance(v, h5py.Dataset):
                     d[k] = v[()]
             check_group(name, d, str(path))
+            _fill_empty_group(d)
             out[name] = d
         return out
+
+
+def _fill_empty_group(d: dict[str, Any]) -> None:
+    """A group of a declared kind with no column at all (what a stage that found nothing
+    wrote before empty groups were filled on writing) is read as the empty table of its
+    kind."""
+    k = KINDS.get(as_text(d["kind"]))
+    if k is None or any(c in d for c in k.columns):
+        return
+    for c, v in empty_columns(k.name).items():
+        d[c] = v
 
 
 def delays_columns(group: dict, path: str) -> dict[str, Any]:

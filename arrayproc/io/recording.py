@@ -20,6 +20,7 @@ from arrayproc.geo.nav import Nav
 from arrayproc.geo.pose import Pose
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.geometry import body_to_world
+from arrayproc.io.units import file_units
 
 FORMAT = "arrayproc.recording"
 FORMAT_VERSION = 1
@@ -208,7 +209,7 @@ class Recording:
         self.fs = attr_number(p, td, "sample_freq")
         if not np.isfinite(self.fs) or self.fs <= 0:
             raise FormatError(f"{p}: sample_freq must be a positive number, got {self.fs}")
-        self.units = _attr_str(td.attrs.get("units", "Pa"))
+        self.units = file_units(td.attrs)  # "Pa" when absent (io/units.py)
         fmt = _attr_str(f.attrs.get("format", ""))
         self.layout = "arrayproc" if fmt == FORMAT else "acoular"
         self.format_version = None

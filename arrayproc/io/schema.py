@@ -14,6 +14,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from arrayproc.errors import FormatError
 
 
@@ -29,11 +31,19 @@ class Column:
         What one value means.
     required : bool
         Whether every group of the kind has it.
+    dtype : str
+        numpy dtype of the values (what the writers store; an empty group gets it too).
+    trailing : tuple
+        Sizes of the dimensions after the rows (``(None,)`` for ``tau`` (n, n_ch), ``(4, 4)``
+        for a state covariance); None where the size depends on the data (0 in an empty
+        table).
     """
 
     unit: str
     doc: str
     required: bool = True
+    dtype: str = "f8"
+    trailing: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -54,9 +64,12 @@ class Kind:
         return [k for k, c in self.columns.items() if c.required]
 
 
-def _c(unit: str, doc: str, required: bool = True) -> Column:
-    return Column(unit, doc, required)
+def _c(unit: str, doc: str, required: bool = True, dtype: str = "f8",
+       trailing: tuple = ()) -> Column:
+    return Column(unit, doc, required, dtype, trailing)
 
+
+_ANY, _ANY2 = (None,), (None, None)  # trailing sizes set by the data (channels, beams, bins)
 
 _BEAM_AXES = {
     "cone_deg": _c("deg", "cone angle of each beam (line arrays)", False),
@@ -67,15 +80,16 @@ _BEAM_AXES = {
 _KINDS = [
     Kind("power", "time block", {
         "time": _c("s", "centre time of the block"),
-        "power_db": _c("dB re 1 µPa", "band power per channel, (n, n_ch)"),
+        "power_db": _c("dB re 1 µPa", "band power per channel, (n, n_ch)", trailing=_ANY),
     }),
     Kind("btr", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
-        "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)"),
+        "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)", trailing=_ANY),
     }, _BEAM_AXES),
     Kind("lofar", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
-        "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)"),
+        "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)",
+                        trailing=_ANY2),
     }, {**_BEAM_AXES, "freq": _c("Hz", "frequency of each bin")}),
     Kind("bearings", "peak on a BTR row or a LOFAR line", {
         "time": _c("s", "centre time of the snapshot"),
@@ -102,20 +116,21 @@ _KINDS = [
         "freq_lo": _c("Hz", "lower edge of the detection box"),
         "freq_hi": _c("Hz", "upper edge of the detection box"),
         "snr_db": _c("dB", "peak band energy over the robust background"),
-        "channel": _c("", "reference channel"),
+        "channel": _c("", "reference channel", dtype="i8"),
     }),
     Kind("delays", "snapshot or event", {
         "time": _c("s", "centre time"),
-        "tau": _c("s", "delay of every channel relative to the reference, (n, n_ch)"),
-        "sigma": _c("s", "1-sigma of each delay, (n, n_ch)"),
-        "corr": _c("", "peak normalised correlation, (n, n_ch)"),
+        "tau": _c("s", "delay of every channel relative to the reference, (n, n_ch)",
+                  trailing=_ANY),
+        "sigma": _c("s", "1-sigma of each delay, (n, n_ch)", trailing=_ANY),
+        "corr": _c("", "peak normalised correlation, (n, n_ch)", trailing=_ANY),
     }),
     Kind("positions", "localised event", {
         "time": _c("s", "event time"),
         "x": _c("m", "east"), "y": _c("m", "north"), "z": _c("m", "down"),
-        "cov": _c("m²", "position covariance, (n, 3, 3)"),
+        "cov": _c("m²", "position covariance, (n, 3, 3)", trailing=(3, 3)),
         "tdoa_rms_s": _c("s", "RMS of the TDOA residuals"),
-        "n_used": _c("", "channel pairs used"),
+        "n_used": _c("", "channel pairs used", dtype="i8"),
     }),
     Kind("directions", "event localised in direction only (planar or line arrays)", {
         "time": _c("s", "event time"),
@@ -127,13 +142,13 @@ _KINDS = [
     }),
     Kind("range_doppler", "ping and beam near contacts", {
         "time": _c("s", "ping time", False),
-        "ping": _c("", "ping index"),
+        "ping": _c("", "ping index", dtype="i8"),
         "cone_deg": _c("deg", "beam cone angle"),
-        "level_db": _c("dB", "matched-filter output, (n, n_range_rate, n_range)"),
+        "level_db": _c("dB", "matched-filter output, (n, n_range_rate, n_range)", trailing=_ANY2),
     }, {"range_m": _c("m", "range axis"), "range_rate_mps": _c("m/s", "range-rate axis")}),
     Kind("contacts", "CFAR contact of one ping", {
         "time": _c("s", "echo time"),
-        "ping": _c("", "ping index"),
+        "ping": _c("", "ping index", dtype="i8"),
         "range_m": _c("m", "range (bistatic path / 2)"),
         "cone_deg": _c("deg", "cone angle"),
         "bearing_port_deg": _c("deg", "true bearing if to port"),
@@ -144,8 +159,9 @@ _KINDS = [
                                         False),
         "absolute_doppler_stbd_mps": _c("m/s", "absolute Doppler if to starboard", False),
         "snr_db": _c("dB", "peak over the CFAR threshold's noise estimate"),
-        "moving": _c("", "|absolute Doppler| above the threshold (on both sides)"),
-        "waveform": _c("", "transmitted waveform name"),
+        "moving": _c("", "|absolute Doppler| above the threshold (on both sides)",
+                     dtype="bool"),
+        "waveform": _c("", "transmitted waveform name", dtype="S16"),
         "cells": _c("", "range-Doppler cells computed for the ping", False),
     }),
     Kind("nb_tracks", "narrowband EKF output sample", {
@@ -154,14 +170,14 @@ _KINDS = [
         "freq_hz": _c("Hz", "frequency estimate"),
         "sigma_cone_deg": _c("deg", "1-sigma of the cone angle"),
         "sigma_freq_hz": _c("Hz", "1-sigma of the frequency"),
-        "filter": _c("", "which of the two staggered filters"),
+        "filter": _c("", "which of the two staggered filters", dtype="i1"),
     }),
     Kind("tracks", "track point", {
         "time": _c("s", "time of the estimate"),
-        "track_id": _c("", "track number"),
+        "track_id": _c("", "track number", dtype="i8"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
-        "cov": _c("m², m²/s²", "state covariance, (n, 4, 4)"),
+        "cov": _c("m², m²/s²", "state covariance, (n, 4, 4)", trailing=(4, 4)),
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
@@ -176,11 +192,11 @@ _KINDS = [
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),
         "t1": _c("s", "window end"),
-        "method": _c("", "bearings, delays or compact"),
+        "method": _c("", "bearings, delays or compact", dtype="S8"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
-        "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)"),
-        "crlb": _c("m², m²/s²", "Cramér-Rao bound, (n, 4, 4)"),
+        "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)", trailing=(4, 4)),
+        "crlb": _c("m², m²/s²", "Cramér-Rao bound, (n, 4, 4)", trailing=(4, 4)),
         "cost": _c("", "negative log-likelihood at the solution"),
         "fim_cond": _c("", "condition number of the Fisher information (eq. 3.54)"),
         "heading_deg": _c("deg", "target course"),
@@ -257,6 +273,26 @@ def check_group(name: str, group: Mapping[str, Any], path: str = "") -> None:
     if missing and any(n > 0 for n in n_rows):
         raise FormatError(f"{path}: group {name!r} (kind {k.name!r}) lacks column(s) "
                           f"{', '.join(missing)}")
+
+
+def empty_columns(kind_name: str) -> dict[str, Any]:
+    """The required columns of a kind with no rows, each of its declared dtype and dimensions
+    (trailing sizes 0 when they are not known): what a group that found nothing holds, so that
+    every reader sees a valid empty table.
+
+    Parameters
+    ----------
+    kind_name : str
+        Product kind.
+
+    Returns
+    -------
+    dict
+        ``{column: ndarray of shape (0, …)}``.
+    """
+    k = kind(kind_name)
+    return {n: np.zeros((0,) + tuple(t or 0 for t in c.trailing), c.dtype)
+            for n, c in k.columns.items() if c.required}
 
 
 def groups_of_kind(groups: Mapping[str, Mapping[str, Any]], kind_name: str) -> list[str]:

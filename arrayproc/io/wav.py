@@ -1,6 +1,7 @@
 """Field recordings in WAV files → the recording format, streamed in chunks.
 
-One multichannel WAV, or one mono WAV per hydrophone (channel order = file order). PCM 8, 16,
+One multichannel WAV, or one mono WAV per hydrophone (channel order = the natural order of the
+file names, :func:`channel_order`). PCM 8, 16,
 24 and 32 bit and IEEE float 32/64 bit; WAVE_FORMAT_EXTENSIBLE headers too. Samples are stored
 as fractions of full scale (``units = "FS"``) unless a scale to pascals is given.
 """
@@ -8,7 +9,9 @@ as fractions of full scale (``units = "FS"``) unless a scale to pascals is given
 from __future__ import annotations
 
 import os
+import re
 import struct
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -125,6 +128,61 @@ def read_wav_frames(info: WavInfo, start: int, count: int) -> np.ndarray:
     return x.reshape(count, info.n_channels)
 
 
+def _name_key(name: str) -> list[tuple[int, int, str]]:
+    """Natural sort key of a file name: text runs compared as text, digit runs as numbers."""
+    return [(1, int(t), t) if t.isdigit() else (0, 0, t) for t in re.split(r"(\d+)", name)]
+
+
+def _numbers_decide(a: str, b: str) -> bool:
+    """Whether the first difference between two names is a number of different value (so
+    ``hyd2`` < ``hyd10`` is decided; ``port`` / ``stbd`` or ``h01`` / ``h1`` are not)."""
+    for x, y in zip(_name_key(a), _name_key(b)):
+        if x != y:
+            return x[0] == y[0] == 1 and x[1] != y[1]
+    return False
+
+
+def channel_order(paths: Sequence[str | os.PathLike]) -> tuple[list, str | None]:
+    """The hydrophone order of mono WAV files: natural order of their names.
+
+    A shell glob gives ``hyd1, hyd10, hyd11, …, hyd2``, which would scramble the channels
+    against the geometry; the files are sorted by the numbers in their names instead
+    (``hyd1, hyd2, …, hyd10``). When some neighbours in that order differ by text rather than
+    by a number (``port.wav stbd.wav``), nothing decides the order: the given order is kept if
+    it is already the sorted one, else refused.
+
+    Parameters
+    ----------
+    paths : list of path-like
+        The files, in the order given.
+
+    Returns
+    -------
+    (list, str or None)
+        The files in channel order, and a one-line notice when that differs from the given
+        order (else None).
+
+    Raises
+    ------
+    FormatError
+        The order is ambiguous: names that sort differently from the given order with no
+        number to decide between them, or two names with the same number (``h01``, ``h1``).
+    """
+    names = [Path(p).name for p in paths]
+    order = sorted(range(len(paths)), key=lambda i: _name_key(names[i]))
+    if order == list(range(len(paths))):
+        return list(paths), None
+    for i, j in zip(order, order[1:]):
+        if not _numbers_decide(names[i], names[j]):
+            raise FormatError(f"import: the channel order of the WAV files is ambiguous: "
+                              f"{names[i]} and {names[j]} differ by no number, and the files "
+                              "were not given in sorted order; name the files so that numbers "
+                              "give the hydrophone order (e.g. h1_stbd.wav h2_port.wav)")
+    shown = ", ".join(names[i] for i in order[:4]) + (", ..." if len(order) > 4 else "")
+    return [paths[i] for i in order], (f"channels in the natural order of the file names "
+                                       f"({shown}), not the order given")
+
+
 def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                 positions: np.ndarray | None = None, scale: float | None = None,
                 sound_speed: float = 1500.0, start_time: str | None = None,
@@ -132,11 +190,16 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
     """Write WAV recordings as one recording file; returns a summary dict.
 
     Several files are taken as one mono (or multichannel) stream each, concatenated along
-    channels; they must share sample rate and sample format. Files of unequal length are cut to
-    the shortest, with a warning naming the longer ones. ``scale`` converts full scale to Pa.
+    channels in the natural order of their names (:func:`channel_order`, with a notice when
+    that is not the order given); they must share sample rate and sample format. Files of
+    unequal length are cut to the shortest, with a warning naming the longer ones. ``scale``
+    converts full scale to Pa.
     """
     if not paths:
         raise FormatError("import: no WAV files given")
+    paths, notice = channel_order(paths)
+    if notice is not None:
+        (warn or warnings.warn)(notice)
     infos = [read_wav_info(p) for p in paths]
     ref = infos[0]
     for i in infos[1:]:

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from arrayproc.io.units import file_units, level_label
 from arrayproc.plots import register_plot
 from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
 
@@ -38,7 +39,8 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
                        extent=[cone[0], cone[-1], t[-1] + dt / 2, t[0] - dt / 2],
                        interpolation="nearest")
         cb = fig.colorbar(im, ax=ax, pad=0.02)
-        cb.set_label(f"beam power Σ|Y|², dB re 1 µPa², unnormalised ({range_db:g} dB range)")
+        cb.set_label(f"beam power Σ|Y|², {level_label(file_units(root), '²')}, unnormalised "
+                     f"({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth and elev is None else None
     if rec is not None:
         from arrayproc.io.truth import cone_angles

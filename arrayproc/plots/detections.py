@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from arrayproc.io.units import level_label, reference_amplitude
 from arrayproc.plots import register_plot
 from arrayproc.plots._delay import groups_of, source_recording
 
@@ -48,9 +49,11 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
     with source_recording(root, path, "detections") as rec:
         x = rec.read()[:, ch].astype(float)
         fs = rec.fs
+        units = rec.units
     f, t, S = spectrogram(x, fs, window="hann", nperseg=nfft, noverlap=nfft // 2,
                           scaling="density")
-    L = 10 * np.log10(np.maximum(S, 1e-30)).T  # (time, freq)
+    ref2 = reference_amplitude(units) ** 2
+    L = 10 * np.log10(np.maximum(S / ref2, 1e-30)).T  # (time, freq)
     top = float(np.percentile(L, 99.9))
     if fmax is None:
         fmax = min(fs / 2, 2 * float(hi.max())) if hi.size else fs / 2
@@ -60,7 +63,7 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
                    extent=[f[0], f[keep][-1], t[-1] + nfft / fs / 2, t[0] - nfft / fs / 2],
                    interpolation="nearest")
     cb = fig.colorbar(im, ax=ax, pad=0.02)
-    cb.set_label(f"PSD, dB re 1 unit²/Hz ({range_db:g} dB range)")
+    cb.set_label(f"PSD, {level_label(units, '²/Hz')} ({range_db:g} dB range)")
     for a, b, fl, fh in zip(t0, t1, lo, hi):
         ax.add_patch(Rectangle((fl, a), fh - fl, b - a, fill=False, ec="red", lw=1.2))
     ax.set_xlabel("frequency (Hz)")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from arrayproc.io.units import file_units, level_label
 from arrayproc.plots import register_plot
 from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
 
@@ -52,7 +53,8 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
                    interpolation="nearest")
     cb = fig.colorbar(im, ax=ax, pad=0.02)
     cb.set_label(("level over TPSW background, dB" if norm == "tpsw"
-                  else "power Σ|Y|², dB re 1 µPa², unnormalised") + f" ({range_db:g} dB range)")
+                  else f"power Σ|Y|², {level_label(file_units(root), '²')}, unnormalised")
+                 + f" ({range_db:g} dB range)")
     rec = open_truth_recording(root) if truth else None
     if rec is not None:
         from arrayproc.io.truth import cone_angles, tonal_frequencies

@@ -159,6 +159,8 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
             names + ((level,) if level and level not in names else ()) if k in g}
     if any(v.shape != t.shape for v in cols.values()):
         raise FormatError(f"{products_path}: bearings columns have unequal lengths")
+    if t.size == 0:  # a bearings stage that found nothing: a valid empty input
+        return cols
     if t.size < 2:
         raise FormatError(f"{products_path}: fewer than two bearing rows")
     ok = np.isfinite(t) & np.isfinite(cols["bearing_port_deg"]) & \
@@ -351,13 +353,27 @@ def run_single(products_path: str, config_path: str, out_path: str,
                progress: bool = False) -> None:
     """``arrayproc track`` with a single-target tracker (see the module doc)."""
     from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.io.units import PASCAL, file_units, level_label
 
     cfg = load_single_config(config_path)
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
+    units = file_units(prod["/"])
+    if cfg.get("level") and units != PASCAL:
+        raise ConfigError(f"{config_path}: tracker.level uses received levels in dB re 1 µPa, "
+                          f"but {products_path} holds levels in {level_label(units)} (a "
+                          "recording imported without --scale)")
     b = _read_bearings(prod, cfg.get("bearings"), products_path, cfg.get("cone_gate"),
                        cfg.get("level"))
+    cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
+    if b["time"].size == 0:
+        warnings.warn(f"{products_path}: the bearings group has no rows (nothing was "
+                      "detected): no track; an empty tracks table is written", stacklevel=2)
+        with ProductsWriter(out_path, source=str(products_path), chain=cfg_text) as w:
+            w.group("tracks", "tracks", stage="track", filter=cfg["filter"],
+                    model=cfg["model"], lr=bool(cfg["lr"]), status=0)
+        return
     src = cfg.get("nav") or as_text(prod["/"].get("source", ""))
     if not src:
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
@@ -383,7 +399,6 @@ def run_single(products_path: str, config_path: str, out_path: str,
         n_ok = int(last.max()) + 1 if last.size else 1
         warnings.warn(f"{out_path}: the track diverged after {n_ok} of {t.size} bearings; "
                       "only the rows before are written", stacklevel=2)
-    cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
     with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,
                         attrs={"recording": str(rec)}) as w:
         g = w.group("tracks", "tracks", stage="track", filter=cfg["filter"],

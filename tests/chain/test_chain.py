@@ -176,3 +176,19 @@ type = "btr"
     assert np.allclose(np.concatenate([a["time"], b["time"]]), full["time"])
     assert np.allclose(np.concatenate([a["power_db"], b["power_db"]]), full["power_db"],
                        atol=1e-3)
+
+
+def test_merge_joins_a_segment_that_found_nothing(tmp_path):
+    """A segment without rows holds its kind's empty table (tau of shape (0, 0)); merged with
+    a segment that has rows (n, 4) it gives that segment's rows, and the units attribute."""
+    from arrayproc.chain.segments import merge_products
+    parts = [tmp_path / "a.h5", tmp_path / "b.h5"]
+    with ProductsWriter(parts[0], attrs={"units": "FS"}) as w:
+        w.group("tde", "delays")
+    tau = np.arange(12.0).reshape(3, 4)
+    with ProductsWriter(parts[1], attrs={"units": "FS"}) as w:
+        w.group("tde", "delays").append(time=np.arange(3.0), tau=tau, sigma=tau, corr=tau)
+    merge_products(parts, tmp_path / "m.h5", "rec.h5", "")
+    g = read_products(tmp_path / "m.h5")
+    np.testing.assert_array_equal(g["tde"]["tau"], tau)  # copied, not computed
+    assert g["/"]["units"] == "FS"

@@ -77,3 +77,20 @@ def test_schema_refuses_undeclared_kinds_and_columns_and_reads_check_required(tm
 def test_missing_directory_is_a_clear_error(tmp_path):
     with pytest.raises(FormatError, match="does not exist"):
         ProductsWriter(tmp_path / "nope" / "out.h5")
+
+
+@pytest.mark.parametrize("kind", sorted(__import__("arrayproc.io.schema",
+                                                   fromlist=["KINDS"]).KINDS))
+def test_a_group_without_rows_is_the_empty_table_of_its_kind(tmp_path, kind):
+    from arrayproc.io.schema import KINDS
+    p = tmp_path / "p.h5"
+    with ProductsWriter(p) as w:
+        w.group("g", kind)
+    g = read_products(p)["g"]
+    k = KINDS[kind]
+    for name in k.required():
+        c = k.columns[name]
+        assert g[name].shape[0] == 0 and g[name].ndim == 1 + len(c.trailing), name
+        assert g[name].dtype == np.dtype(c.dtype), name
+    with h5py.File(p) as f:  # on disk too, resizable like any row column (segments merge)
+        assert all(f["g"][n].maxshape[0] is None for n in k.required())

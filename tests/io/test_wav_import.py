@@ -132,3 +132,26 @@ def test_geometry_z_up_matches_the_deployment_depths(tmp_path):
         depth = np.array([float(r["hydrophone_depth"]) for r in csv.DictReader(f)])
     # depth differences equal z differences (m), channel by channel
     assert np.allclose(pos[:, 2] - pos[3, 2], depth - depth[3], atol=0.02)
+
+
+@pytest.mark.parametrize("given,expected,notice", [
+    (["hyd1.wav", "hyd10.wav", "hyd11.wav", "hyd2.wav"],
+     ["hyd1.wav", "hyd2.wav", "hyd10.wav", "hyd11.wav"], True),
+    (["hyd1.wav", "hyd2.wav", "hyd10.wav"], ["hyd1.wav", "hyd2.wav", "hyd10.wav"], False),
+    (["AMAR173.2.20190920T163858Z.wav", "AMAR173.1.20190920T163858Z.wav"],
+     ["AMAR173.1.20190920T163858Z.wav", "AMAR173.2.20190920T163858Z.wav"], True),
+    (["port.wav", "stbd.wav"], ["port.wav", "stbd.wav"], False),  # sorted already: kept
+])
+def test_channel_order_is_natural(given, expected, notice):
+    from arrayproc.io.wav import channel_order
+    order, msg = channel_order(given)
+    assert order == expected
+    assert (msg is not None) == notice
+
+
+@pytest.mark.parametrize("given", [["stbd.wav", "port.wav"], ["h1.wav", "h01.wav"],
+                                   ["b1.wav", "a2.wav"]])
+def test_channel_order_refuses_what_no_number_decides(given):
+    from arrayproc.io.wav import channel_order
+    with pytest.raises(FormatError, match="ambiguous"):
+        channel_order(given)

@@ -20,9 +20,11 @@ from arrayproc.chain import Stage
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta
 from arrayproc.dsp import fft
+from arrayproc.dsp.bands import check_nyquist
 from arrayproc.dsp.framing import FrameBuffer
 from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
+from arrayproc.stages.beamform.checks import warn_spatial_aliasing
 
 
 def uniform_line(positions: np.ndarray, tol: float = 1e-3) -> tuple[np.ndarray, float]:
@@ -138,6 +140,10 @@ def make_framer(stage: Stage, b: Block) -> SpectraFramer:
             raise ConfigError(f"stage {stage.name!r}: {e}") from None
         # rounded up to an FFT-friendly length (at most a few per mille longer than T_B)
         nfft = fft.next_fast_len(int(round(tb * b.fs)))
+    where = f"stage {stage.name!r}"
+    check_nyquist(stage.band, b.fs / 2, where)
+    f_max = b.fs / 2 if stage.band is None else min(b.fs / 2, float(stage.band[1]))
+    warn_spatial_aliasing(where, b.positions, f_max, stage.ctx.sound_speed)
     rec = stage.ctx.recording
     nav = rec.nav if rec is not None else None
     return SpectraFramer(nfft, nfft, stage.window,

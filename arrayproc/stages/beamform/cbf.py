@@ -51,6 +51,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta
 from arrayproc.dsp import fft, workers
+from arrayproc.dsp.bands import check_nyquist
 from arrayproc.dsp.blas_threads import set_local_threads
 from arrayproc.dsp.shading import KINDS as SHADINGS
 from arrayproc.dsp.shading import shading_weights
@@ -58,6 +59,7 @@ from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
 from arrayproc.geo.beams import beam_directions
 from arrayproc.stages.beamform import _kernels as kb
+from arrayproc.stages.beamform.checks import warn_cone_geometry, warn_spatial_aliasing
 
 WINDOWS = ("none", "hann", "hamming", "blackman", "blackmanharris")
 BINS_PER_TASK = 32  # bins per GEMM call of a worker
@@ -186,6 +188,7 @@ class CBF(Stage):
             f_all = fc + np.fft.fftfreq(self.nfft, 1.0 / fs)
         else:
             f_all = np.fft.rfftfreq(self.nfft, 1.0 / fs)
+        check_nyquist(self.band, fc + fs / 2, f"stage {self.name!r}")
         lo, hi = (self.band if self.band is not None else (-np.inf, np.inf))
         idx = np.flatnonzero((f_all >= lo) & (f_all <= hi))
         if idx.size == 0:
@@ -196,6 +199,10 @@ class CBF(Stage):
         self._bins = idx
         self._contig = bool(np.all(np.diff(idx) == 1))
         self.freqs = f_all[idx]
+        if self.beam_mode == "cone":
+            warn_cone_geometry(f"stage {self.name!r}", b.positions)
+        warn_spatial_aliasing(f"stage {self.name!r}", b.positions, float(self.freqs.max()),
+                              self.ctx.sound_speed, self.beam_mode)
         weights = shading_weights(self.shading, b.positions, self.sidelobe_db)
         delays = element_delays(b.positions, self._unique, self.beam_mode, self.ctx.sound_speed)
         self.weights, self._delays = weights, delays

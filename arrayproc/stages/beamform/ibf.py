@@ -11,7 +11,8 @@ sidelobes too.
 Output: the cleaned element spectra (domain ``("snapshot", "freq", "channel")``, see
 :mod:`arrayproc.stages._common`) for ``etam``/``psas`` downstream, and a products group
 ``ibf_removed`` with one row per removed wave and snapshot: ``time`` (s), ``cone_deg``,
-``level_db`` (the wave's in-band mean square at an element, dB re 1 µPa² for data in Pa),
+``level_db`` (the wave's in-band mean square at an element, dB re 1 µPa² for data in Pa,
+re FS² for data in full scale),
 ``snr_db`` (band beam power over the noise estimate), ``freq_lo``, ``freq_hi`` (Hz).
 """
 
@@ -26,6 +27,7 @@ from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
 from arrayproc.errors import ConfigError
+from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.beamform import _sa_kernels as ks
 from arrayproc.stages.beamform._common import element_spectra, line_geometry, rule_snapshot_seconds
 
@@ -227,6 +229,7 @@ class IBF(Stage):
         rows: dict[str, list[float]] = {k: [] for k in ("time", "cone_deg", "level_db", "snr_db",
                                                         "freq_lo", "freq_hi")}
         nfft = spec.meta.nfft
+        ref = reference_amplitude(recording_units(self.ctx.recording))
         for s in range(data.shape[0]):
             res, removed = onion_peel(spec.data[s][:, order], spec.freqs, x, dx, c,
                                       self.max_sources, self.stop_db,
@@ -238,7 +241,7 @@ class IBF(Stage):
                 ms = 2.0 * float(np.sum(np.abs(r["amp"]) ** 2)) / nfft**2
                 rows["time"].append(float(spec.meta.times[s]))
                 rows["cone_deg"].append(r["cone_deg"])
-                rows["level_db"].append(10 * np.log10(max(ms, 1e-300) / 1e-12))
+                rows["level_db"].append(10 * np.log10(max(ms, 1e-300) / ref**2))
                 rows["snr_db"].append(r["snr_db"])
                 rows["freq_lo"].append(float(spec.freqs[0]))
                 rows["freq_hi"].append(float(spec.freqs[-1]))

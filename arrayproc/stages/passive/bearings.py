@@ -39,6 +39,7 @@ from arrayproc.dsp.peaks import pick_peaks
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
+from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.passive._common import check_power_block, snapshot_times
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
@@ -88,7 +89,8 @@ class Bearings(Stage):
         "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
         "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
         "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
-        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa)", check=positive),
+        "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
     }
 
     def validate(self) -> None:
@@ -132,7 +134,8 @@ class Bearings(Stage):
             heads = np.asarray(b.meta.headings, float)
             df = float(b.meta.df)
             rows: dict[str, list] = {k: [] for k in COLUMNS}
-            lref = 10 * np.log10(self.ref**2)
+            lref = 10 * np.log10(reference_amplitude(recording_units(self.ctx.recording),
+                                                     self.ref)**2)
             off_bb = received_level_offset_db(b, broadband=True)
             off_line = received_level_offset_db(b, broadband=False)
             for s in range(b.data.shape[0]):

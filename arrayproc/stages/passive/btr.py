@@ -19,6 +19,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
+from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.passive._common import beam_columns, check_power_block, snapshot_times
 
 
@@ -30,7 +31,8 @@ class BTR(Stage):
     accepts = frozenset({Domain.POWER})
     params = {
         "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins)"),
-        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa)", check=positive),
+        "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -50,6 +52,7 @@ class BTR(Stage):
                 else b.data[:, idx, :]
             bp = p.sum(axis=1, dtype=np.float64)
             if out is not None:
-                db = 10 * np.log10(np.maximum(bp, 1e-300) / self.ref**2)
+                ref = reference_amplitude(recording_units(self.ctx.recording), self.ref)
+                db = 10 * np.log10(np.maximum(bp, 1e-300) / ref**2)
                 out.append(time=snapshot_times(b), power_db=db.astype(np.float32))
             yield b

@@ -22,6 +22,7 @@ from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.errors import ConfigError
+from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.passive._common import beam_columns, check_power_block, snapshot_times
 
 
@@ -58,7 +59,8 @@ class LOFAR(Stage):
         "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
         "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
         "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
-        "ref": Param("float", 1e-6, "reference amplitude for dB (normalise = none)",
+        "ref": Param("float", None, "reference amplitude for dB (normalise = none), in sample "
+                     "units (default: 1 µPa for data in Pa, full scale for data in FS)",
                      check=positive),
     }
 
@@ -88,6 +90,7 @@ class LOFAR(Stage):
                     bg = tpsw(p, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
                     db = 10 * np.log10(np.maximum(p, 1e-300) / np.maximum(bg, 1e-300))
                 else:
-                    db = 10 * np.log10(np.maximum(p, 1e-300) / self.ref**2)
+                    ref = reference_amplitude(recording_units(self.ctx.recording), self.ref)
+                    db = 10 * np.log10(np.maximum(p, 1e-300) / ref**2)
                 out.append(time=snapshot_times(b), power_db=db.astype(np.float32))
             yield b

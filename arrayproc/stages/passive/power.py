@@ -10,7 +10,8 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp import fft
-from arrayproc.errors import ConfigError
+from arrayproc.dsp.bands import check_nyquist
+from arrayproc.io.units import recording_units, reference_amplitude
 
 
 @register
@@ -26,14 +27,14 @@ class Power(Stage):
     accepts = frozenset({Domain.TIME})
     params = {
         "band": Param("band", None, "frequency band [lo, hi] Hz; whole band when absent"),
-        "ref": Param("float", 1e-6, "reference amplitude for dB (1 µPa for data in Pa)",
+        "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
+                     "1 µPa for data in Pa, full scale for data in FS)",
                      check=positive),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
-        if self.band is not None and self.fs_in > 0 and self.band[0] >= self.fs_in / 2:
-            raise ConfigError(f"stage {self.name!r}: key 'band': {self.band} Hz lies above the "
-                              f"Nyquist frequency {self.fs_in / 2:g} Hz of its input")
+        check_nyquist(self.band, self.fs_in / 2, f"stage {self.name!r}")
+        ref = reference_amplitude(recording_units(self.ctx.recording), self.ref)
         out = self.products("power")
         for b in blocks:
             n_valid = b.meta.n_valid
@@ -49,7 +50,7 @@ class Power(Stage):
             ms = p2.sum(axis=0) / max(n_valid, 1) ** 2
             if out is not None:
                 out.append(time=np.array([b.t0 + 0.5 * n_valid / b.fs]),
-                           power_db=(10 * np.log10(np.maximum(ms, 1e-300) / self.ref**2))[None])
+                           power_db=(10 * np.log10(np.maximum(ms, 1e-300) / ref**2))[None])
             yield b
 
 
