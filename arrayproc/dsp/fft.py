@@ -10,27 +10,63 @@ stages already run their FFTs beside numba and BLAS threads, and on this project
 machine a two-thread FFTW plan was measured 1.3-25x *slower* than a one-thread plan for the
 shapes the stages use (e.g. a 256-point inverse FFT of 1021 rows: 0.33 ms with one thread,
 8 ms with two; `docs/performance.md`).
+
+pyfftw and scipy.fft are imported when first used, not with this module (together about
+1.2 s of every command's start-up, docs/performance/startup.md); ducc0 (10 ms) is imported here.
 """
 
 from __future__ import annotations
 
+import importlib.util
+from types import ModuleType
+
 import numpy as np
-import scipy.fft as _sfft
 
 try:
-    import pyfftw
-    import pyfftw.builders as _builders
-
-    HAVE_PYFFTW = True
-except ImportError:  # pragma: no cover - pyfftw is a dependency, the fallback is for odd systems
-    HAVE_PYFFTW = False
-
-try:
-    import ducc0.fft as _ducc
+    import ducc0.fft as _ducc  # about 10 ms to import
 
     HAVE_DUCC = True
 except ImportError:  # optional extra ``fast``
     HAVE_DUCC = False
+
+#: pyfftw is installed; it is imported on first use (:func:`_pyfftw`): with dask installed,
+#: ``import pyfftw`` imports ``dask.array`` too, about 0.9 s of start-up here
+HAVE_PYFFTW = importlib.util.find_spec("pyfftw") is not None
+_pyfftw_module: ModuleType | None = None
+
+
+def _pyfftw() -> ModuleType | None:
+    """The ``pyfftw`` module with its builders, imported once on first use; None without it."""
+    global HAVE_PYFFTW, _pyfftw_module
+    if _pyfftw_module is None and HAVE_PYFFTW:
+        try:
+            import pyfftw
+            import pyfftw.builders  # noqa: F401  (the attribute used below)
+
+            _pyfftw_module = pyfftw
+        except ImportError:  # pragma: no cover - a broken install: fall back to scipy.fft
+            HAVE_PYFFTW = False
+    return _pyfftw_module
+
+
+def _scipy_fft() -> ModuleType:
+    """``scipy.fft``, imported on first use (about 0.3 s with scipy.special, which it loads)."""
+    import scipy.fft
+
+    return scipy.fft
+
+
+def empty_aligned(shape: tuple[int, ...], dtype: np.dtype | type, align: int = 64) -> np.ndarray:
+    """Uninitialised C-contiguous array whose data start on an ``align``-byte boundary (as
+    ``pyfftw.empty_aligned``, which would import pyfftw: 64 bytes covers AVX-512 and a cache
+    line, so that threads writing pieces of one array a multiple of 64 bytes long never share
+    a line)."""
+    dtype = np.dtype(dtype)
+    nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+    raw = np.empty(nbytes + align, np.uint8)
+    start = -raw.ctypes.data % align
+    return raw[start:start + nbytes].view(dtype).reshape(shape)
+
 
 _threads = 1
 _plans: dict[tuple, object] = {}
@@ -50,8 +86,8 @@ def _plan(kind: str, x: np.ndarray, n: int | None, axis: int):
     if p is None:
         if len(_plans) >= _MAX_PLANS:
             _plans.clear()
-        build = getattr(_builders, kind)
-        p = build(pyfftw.empty_aligned(x.shape, x.dtype), n=n, axis=axis, threads=_threads,
+        build = getattr(_pyfftw().builders, kind)
+        p = build(empty_aligned(x.shape, x.dtype), n=n, axis=axis, threads=_threads,
                   planner_effort="FFTW_ESTIMATE", auto_align_input=True, auto_contiguous=True,
                   avoid_copy=False)
         _plans[key] = p
@@ -62,8 +98,8 @@ def _run(kind: str, x: np.ndarray, n: int | None, axis: int) -> np.ndarray:
     x = np.asarray(x)
     if x.dtype not in (np.float32, np.float64, np.complex64, np.complex128):
         x = x.astype(np.float64)
-    if not HAVE_PYFFTW:
-        return getattr(_sfft, kind)(x, n=n, axis=axis)
+    if _pyfftw() is None:
+        return getattr(_scipy_fft(), kind)(x, n=n, axis=axis)
     if kind in ("fft", "ifft") and x.dtype.kind == "f":
         x = x.astype(np.complex64 if x.dtype == np.float32 else np.complex128)
     if kind == "irfft" and x.dtype.kind == "f":
@@ -95,8 +131,15 @@ def ifft(x: np.ndarray, n: int | None = None, axis: int = -1) -> np.ndarray:
 
 
 def next_fast_len(n: int) -> int:
-    """Smallest FFT-friendly length >= n."""
-    return _sfft.next_fast_len(int(n))
+    """Smallest FFT-friendly length >= n (a product of 2, 3, 5, 7 and 11).
+
+    ``ducc0.fft.good_size`` when ducc0 is installed (the same sizes as
+    ``scipy.fft.next_fast_len``, checked in tests/dsp/test_fft.py, without importing scipy.fft),
+    else scipy's.
+    """
+    if HAVE_DUCC:
+        return int(_ducc.good_size(int(n), False))
+    return _scipy_fft().next_fast_len(int(n))
 
 
 class BufferedPlan:
@@ -126,20 +169,20 @@ class BufferedPlan:
         self.kind, self.axis = kind, axis % len(shape)
         dtype = np.dtype(dtype)
         self._workers = _threads
-        alloc = pyfftw.empty_aligned if HAVE_PYFFTW else np.empty
-        self.input = alloc(shape, dtype)
+        self.input = empty_aligned(shape, dtype)
         self.input[...] = 0
         if backend == "auto":
             backend = "ducc0" if HAVE_DUCC else "scipy"
-        if backend == "fftw" and HAVE_PYFFTW:
+        if backend == "fftw" and _pyfftw() is not None:
             effort = "FFTW_MEASURE" if self.input.size >= 1 << 20 else "FFTW_ESTIMATE"
-            self._run = getattr(_builders, kind)(
+            self._run = getattr(_pyfftw_module.builders, kind)(
                 self.input, axis=axis, threads=_threads, planner_effort=effort,
                 overwrite_input=False, avoid_copy=True, auto_align_input=False,
                 auto_contiguous=False)
         elif backend == "ducc0" and HAVE_DUCC:
             self._run = self._ducc_runner()
         elif backend in ("scipy", "fftw", "ducc0"):  # scipy, or the fallback for a missing one
+            self._sfft = _scipy_fft()
             backend, self._run = "scipy", self._scipy
         else:
             raise ValueError(f"unknown FFT back-end {backend!r}")
@@ -165,7 +208,7 @@ class BufferedPlan:
         return lambda: _ducc.c2c(x, axes=ax, forward=False, inorm=2, out=out)
 
     def _scipy(self) -> np.ndarray:
-        return getattr(_sfft, self.kind)(self.input, axis=self.axis, workers=self._workers)
+        return getattr(self._sfft, self.kind)(self.input, axis=self.axis, workers=self._workers)
 
     def __call__(self) -> np.ndarray:
         return self._run()

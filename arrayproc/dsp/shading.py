@@ -7,7 +7,9 @@ elements samples the continuous taper at ``x_n = (n - (N-1)/2) / N`` in (-1/2, 1
 end elements keep a non-zero weight. Non-uniform line arrays get the same continuous taper at
 their actual positions; Dolph-Chebyshev has no continuous form and is applied by element rank.
 Every result is normalised to mean 1, so the plane-wave gain at the steered direction stays
-N_H (thesis eq. 2.14).
+N_H (thesis eq. 2.14). The cosine and Taylor tapers are closed forms; Dolph-Chebyshev comes
+from ``scipy.signal.windows``, imported only when asked for (importing it loads the whole of
+``scipy.signal``, about a second of start-up).
 """
 
 from __future__ import annotations
@@ -15,7 +17,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.signal import windows
 
 from arrayproc.errors import ConfigError
 
@@ -79,9 +80,10 @@ def shading_weights(kind: str, positions: np.ndarray, sidelobe_db: float = 30.0,
     elif kind == "chebyshev":
         order = np.argsort(_axis_coordinates(positions), kind="stable")
         w = np.empty(n)
+        from scipy.signal.windows import chebwin  # imports all of scipy.signal: only here
         with warnings.catch_warnings():  # scipy warns about spectral-analysis use below 45 dB
             warnings.simplefilter("ignore", UserWarning)
-            w[order] = windows.chebwin(n, abs(sidelobe_db))
+            w[order] = chebwin(n, abs(sidelobe_db))
     else:
         raise ConfigError(f"shading: unknown kind {kind!r} (known: {', '.join(KINDS)})")
     return w / w.mean()

@@ -43,3 +43,40 @@ def test_info_imports_nothing_heavy(tmp_path, rng):
     rec = write_recording(tmp_path / "r.h5", rng.standard_normal((100, 4)).astype(np.float32),
                           positions=line_array(4, 0.5))
     assert _heavy_modules("info", str(rec)) == []
+
+
+# Issue 23: `process` with the shipped towed-array chain (dft_filter, CBF, integrate, BTR,
+# LOFAR, bearings) runs without importing these: windows and tapers are closed forms (or
+# numpy's Kaiser), pyfftw (which imports dask.array) and scipy.fft load only when a path uses
+# them. scipy.linalg is not listed: numba imports it on its first compile or cache load.
+PROCESS_FORBIDDEN = ("scipy.signal", "scipy.stats", "scipy.optimize", "scipy.interpolate",
+                     "pyfftw", "dask", "distributed", "matplotlib", "arrayproc.sim",
+                     "arrayproc.track", "arrayproc.plots")
+
+PROCESS_PROBE = """
+import json, sys
+from arrayproc.app.cli import main
+rc = main(sys.argv[1:])
+print(json.dumps([rc, sorted(sys.modules)]), file=sys.stderr)
+"""
+
+
+def test_process_of_the_towed_chain_imports_no_scipy_signal_pyfftw_or_dask(tmp_path, rng):
+    from arrayproc.data import data_path
+    from arrayproc.dsp import fft
+
+    rec = write_recording(tmp_path / "r.h5",
+                          rng.standard_normal((3 * 2048, 8)).astype(np.float32), fs=2048.0,
+                          positions=line_array(8, 0.75))
+    chain = data_path("chains", "towed_passive.toml")
+    r = subprocess.run([sys.executable, "-c", PROCESS_PROBE, "process", str(rec), "-c",
+                        str(chain), "-o", str(tmp_path / "p.h5"), "-q", "--no-progress"],
+                       capture_output=True, text=True)
+    rc, modules = json.loads(r.stderr.strip().splitlines()[-1])
+    assert rc == 0 and (tmp_path / "p.h5").exists()
+    loaded = [m for m in modules if any(m == f or m.startswith(f + ".")
+                                        for f in PROCESS_FORBIDDEN)]
+    assert loaded == []
+    assert "arrayproc.stages.beamform.cbf" in modules  # the probe did run the chain
+    if fft.HAVE_DUCC:  # the FFT sizes and plans come from ducc0 then
+        assert "scipy.fft" not in modules

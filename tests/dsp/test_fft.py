@@ -63,3 +63,23 @@ def test_unknown_kind_or_backend_is_refused():
         fft.BufferedPlan("dct", (8,), np.float32)
     with pytest.raises(ValueError):
         fft.BufferedPlan("rfft", (8,), np.float32, backend="mkl")
+
+
+@pytest.mark.skipif(not fft.HAVE_DUCC, reason="ducc0 (extra 'fast') not installed")
+@settings(max_examples=200, deadline=None)
+@given(n=st.one_of(st.integers(1, 5000), st.integers(5000, 10**9)))
+def test_next_fast_len_is_scipys(n):
+    """ducc0's good_size (used so that scipy.fft is not imported for it) picks the same FFT
+    size as scipy.fft.next_fast_len: the same chains give the same frames either way."""
+    import scipy.fft
+
+    assert fft.next_fast_len(n) == scipy.fft.next_fast_len(n)
+
+
+@pytest.mark.parametrize("shape,dtype", [((7,), np.float32), ((3, 5), np.complex64),
+                                         ((0, 4), np.float64), ((2, 3, 4), np.complex128)])
+def test_empty_aligned_is_aligned_and_contiguous(shape, dtype):
+    for _ in range(5):  # several allocations: not aligned by luck
+        a = fft.empty_aligned(shape, dtype)
+        assert a.shape == shape and a.dtype == dtype and a.flags.c_contiguous
+        assert a.flags.writeable and (a.size == 0 or a.ctypes.data % 64 == 0)  # empty: no data
