@@ -8,6 +8,8 @@ chosen one and turns what can go wrong into one line on stderr:
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
 * Python warnings (e.g. a diverging track): ``arrayproc: warning: …``;
+* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time`` on stdout, unless
+  ``-q`` (:mod:`arrayproc.app.progress`);
 * anything else is a bug: ``arrayproc: internal error: …``, status 70, with the traceback
   only when ``ARRAYPROC_DEBUG=1``.
 
@@ -21,6 +23,7 @@ import importlib
 import os
 import signal
 import sys
+import time
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -207,7 +210,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``arrayproc`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Run ``arrayproc`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    The start time is stamped on the parsed arguments (``args.started``, perf_counter) for the
+    summary line that long commands print when they end (:mod:`arrayproc.app.progress`).
+    """
+    started = time.perf_counter()
     from arrayproc.io.atomic import clear_stop, discard_all
     clear_stop()
     old = _install_handlers()
@@ -218,6 +226,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         try:
             args = build_parser().parse_args(argv)
+            args.started = started
             ensure_numba_cache()
             return _run(args)
         except Interrupted as e:  # a signal while parsing or reporting
