@@ -177,6 +177,17 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"arrayproc: warning: {text}", file=sys.stderr)
 
 
+def _stop_cause(e: BaseException) -> Interrupted | None:
+    """The stop signal behind an exception that wraps it (``__cause__``/``__context__``)."""
+    seen: set[int] = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, Interrupted):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
@@ -202,6 +213,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"arrayproc: error: {where}{e.strerror or e}", file=sys.stderr)
         return 2
     except Exception as e:
+        stop = _stop_cause(e)
+        if stop is not None:  # a signal raised where Python wraps it (e.g. in __set_name__)
+            print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
+            return 128 + stop.signum
         if os.environ.get("ARRAYPROC_DEBUG"):
             raise
         print(f"arrayproc: internal error: {type(e).__name__}: {' '.join(str(e).split())} "
