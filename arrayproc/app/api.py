@@ -87,7 +87,7 @@ def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
     t_start, t_stop : float, optional
         Segment to process, s since the recording start.
     progress : bool
-        Show a progress bar on stderr.
+        Show a progress bar on stderr, in seconds of audio.
     log : callable, optional
         Where stages send warnings (default: stderr).
 
@@ -96,4 +96,10 @@ def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
     int
         Number of time blocks read.
     """
-    return _chain.run_chain(recording, spec, products, t_start, t_stop, progress, log)
+    from arrayproc.app.progress import audio_bar
+    bar = audio_bar(progress, "process")
+    try:
+        return _chain.run_chain(recording, spec, products, t_start, t_stop, bar, log)
+    finally:
+        if bar is not None:
+            bar.close()

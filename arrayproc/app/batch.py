@@ -461,7 +461,7 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
     retries : int
         Dask retries of a task that raised an unexpected error or lost its worker.
     progress : bool
-        Show a bar over tasks on stderr.
+        Show a bar on stderr over the seconds of audio of the inputs to run.
 
     Returns
     -------
@@ -523,10 +523,11 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
                           text, retries=retries, pure=False,
                           key=f"merge-{res.output.stem}-{os.getpid()}-{time.time_ns()}")
         futures[f] = i
-    bar = None
-    if progress and futures:
-        from tqdm import tqdm
-        bar = tqdm(total=len(futures), unit="task", desc="batch", file=sys.stderr)
+    from arrayproc.app.progress import audio_bar, recording_seconds
+    bar = audio_bar(progress and bool(futures), "batch")
+    seconds = {i: recording_seconds(results[i].recording) or 0.0 for i in futures.values()} \
+        if bar is not None else {}
+    total_s, done_s = sum(seconds.values()), 0.0
     try:
         for f in distributed.as_completed(list(futures)):
             res = results[futures[f]]
@@ -543,7 +544,8 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
                 res.status = "failed"
                 res.error = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
             if bar is not None:
-                bar.update(1)
+                done_s += seconds[futures[f]]
+                bar(done_s, total_s)
     finally:
         if bar is not None:
             bar.close()
@@ -573,6 +575,8 @@ def summary(results: Sequence[TaskResult]) -> str:
 # -- command line -------------------------------------------------------------------------------
 def cmd_batch(args: argparse.Namespace) -> int:
     """``arrayproc batch``: exit 0 when every input is done or skipped, 1 when any failed."""
+    from arrayproc.app.progress import Summary, bar_wanted, recording_seconds
+    done_line = Summary.of(args)
     require_dask()
     inputs = expand_inputs(args.inputs)
     if args.segment_s is not None and not args.segment_s > 0:
@@ -596,7 +600,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
             print(f"arrayproc batch: {note}", file=sys.stderr)
         results = run_batch(inputs, args.chain, args.output, client, args.segment_s,
                             args.resume, args.seed, threads, args.retries,
-                            progress=not args.no_progress and sys.stderr.isatty())
+                            progress=bar_wanted(args))
     finally:
         client.close()
         if cluster is not None:
@@ -606,8 +610,13 @@ def cmd_batch(args: argparse.Namespace) -> int:
             print(f"arrayproc: warning: {r.recording.name}: {w}", file=sys.stderr)
     line = summary(results)
     failed = any(r.status == "failed" for r in results)
-    print(f"arrayproc batch: {line}", file=sys.stderr if failed else sys.stdout)
-    return 1 if failed else 0
+    if failed:
+        print(f"arrayproc batch: {line}", file=sys.stderr)
+        return 1
+    audio = [recording_seconds(r.recording) for r in results if r.status == "done"]
+    done_line(f"{Path(args.output)}/", line,
+              sum(audio) if audio and None not in audio else None)
+    return 0
 
 
 def add_parser(sub: Any) -> None:
@@ -630,5 +639,6 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--retries", type=int, default=2,
                    help="retries of a task whose worker died or that failed unexpectedly")
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.add_argument("-q", "--quiet", action="store_true", help="no summary line at the end")
     s.set_defaults(func=cmd_batch)
 

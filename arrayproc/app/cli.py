@@ -8,6 +8,8 @@ chosen one and turns what can go wrong into one line on stderr:
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
 * Python warnings (e.g. a diverging track): ``arrayproc: warning: …``;
+* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time`` on stdout, unless
+  ``-q`` (:mod:`arrayproc.app.progress`);
 * anything else is a bug: ``arrayproc: internal error: …``, status 70, with the traceback
   only when ``ARRAYPROC_DEBUG=1``.
 
@@ -21,6 +23,7 @@ import importlib
 import os
 import signal
 import sys
+import time
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -180,6 +183,17 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def _stop_cause(e: BaseException) -> Interrupted | None:
+    """The stop signal behind an exception that wraps it (``__cause__``/``__context__``)."""
+    seen: set[int] = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, Interrupted):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
@@ -205,6 +219,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"arrayproc: error: {where}{e.strerror or e}", file=sys.stderr)
         return 2
     except Exception as e:
+        stop = _stop_cause(e)
+        if stop is not None:  # a signal raised where Python wraps it (e.g. in __set_name__)
+            print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
+            return 128 + stop.signum
         if os.environ.get("ARRAYPROC_DEBUG"):
             raise
         print(f"arrayproc: internal error: {type(e).__name__}: {' '.join(str(e).split())} "
@@ -213,7 +231,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``arrayproc`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Run ``arrayproc`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    The start time is stamped on the parsed arguments (``args.started``, perf_counter) for the
+    summary line that long commands print when they end (:mod:`arrayproc.app.progress`).
+    """
+    started = time.perf_counter()
     from arrayproc.io.atomic import clear_stop, discard_all
     clear_stop()
     old = _install_handlers()
@@ -224,6 +247,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         try:
             args = build_parser().parse_args(argv)
+            args.started = started
             ensure_numba_cache()
             return _run(args)
         except Interrupted as e:  # a signal while parsing or reporting

@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from arrayproc.app.progress import Summary, audio_seconds, bar_wanted, products_what, recording_what
 from arrayproc.errors import ArrayprocError, ConfigError, FormatError
 from arrayproc.io.atomic import check_output
 
@@ -117,7 +118,7 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
     nan : {"error", "zero"}
         NaN/Inf samples: stop, or replace by zeros with a warning.
     progress : bool
-        Progress bar on stderr.
+        Progress bar on stderr, in seconds of audio.
     max_memory : float, optional
         Refuse a chain whose estimated working memory exceeds this many bytes (default: half
         the machine's RAM).
@@ -222,7 +223,7 @@ def simulate(scenario: str, output: str, seed: int | None = None,
     duration : float, optional
         Shortens the scenario, s (finite, > 0).
     progress : bool
-        Progress bar on stderr.
+        Progress bar on stderr, in seconds of audio.
     warn : callable
         Where warnings go.
 
@@ -236,9 +237,15 @@ def simulate(scenario: str, output: str, seed: int | None = None,
         raise ConfigError(f"--seed must be in 0..2**64-1, got {seed}")
     if duration is not None and not (_finite(duration) and duration > 0):
         raise ConfigError(f"--duration must be a finite number > 0 s, got {duration:g}")
+    from arrayproc.app.progress import audio_bar
     from arrayproc.sim.run import simulate_file
-    return simulate_file(scenario, output, seed=seed, duration=duration, progress=progress,
-                         warn=warn)
+    bar = audio_bar(progress, "simulate")
+    try:
+        return simulate_file(scenario, output, seed=seed, duration=duration, progress=bar,
+                             warn=warn)
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 # -- plot -------------------------------------------------------------------------------------
@@ -526,11 +533,6 @@ def _geometry_inputs(args: argparse.Namespace) -> list[str]:
     return [args.geometry] if getattr(args, "geometry", None) else []
 
 
-def progress_wanted(args: argparse.Namespace) -> bool:
-    """A progress bar unless ``--no-progress`` or stderr is not a terminal."""
-    return not getattr(args, "no_progress", False) and sys.stderr.isatty()
-
-
 def _run_info(args: argparse.Namespace) -> int:
     info(args.file, positions=_geometry_of(args))
     return 0
@@ -538,31 +540,32 @@ def _run_info(args: argparse.Namespace) -> int:
 
 def _run_process(args: argparse.Namespace) -> int:
     from arrayproc.app.resources import parse_bytes
+    done = Summary.of(args)
     check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
     n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
-                nan=args.nan, progress=progress_wanted(args), max_memory=limit)
-    if not args.quiet:
-        print(f"{args.output}: {n} blocks processed")
+                nan=args.nan, progress=bar_wanted(args), max_memory=limit)
+    done(args.output, f"{products_what(args.output)}, {n} block{'s' * (n != 1)}",
+         audio_seconds(args.recording))
     return 0
 
 
 def _run_import(args: argparse.Namespace) -> int:
+    done = Summary.of(args)
     check_output(args.output, [*args.wav, *_geometry_inputs(args)])
     r = import_wavs(args.wav, args.output, positions=_geometry_of(args), scale=args.scale,
                     sound_speed=args.sound_speed, start_time=args.start_time,
                     inputs=_geometry_inputs(args))
-    if not args.quiet:
-        print(f"{args.output}: {r['n_channels']} channels, {r['n_samples']} samples at "
-              f"{r['fs']} Hz ({r['format']})")
+    done(args.output, f"{recording_what(args.output)}, {r['format']}",
+         audio_seconds(args.output))
     return 0
 
 
 def _run_simulate(args: argparse.Namespace) -> int:
+    done = Summary.of(args)
     simulate(args.scenario, args.output, seed=args.seed, duration=args.duration,
-             progress=progress_wanted(args))
-    if not args.quiet:
-        print(f"{args.output}: written")
+             progress=bar_wanted(args))
+    done(args.output, recording_what(args.output), audio_seconds(args.output))
     return 0
 
 
@@ -574,14 +577,15 @@ def _run_plot(args: argparse.Namespace) -> int:
 
 
 def _run_track(args: argparse.Namespace) -> int:
-    track(args.products, args.config, args.output, progress=progress_wanted(args))
-    print(f"{args.output}: {_tracks_summary(args.output)}")
+    done = Summary.of(args)
+    track(args.products, args.config, args.output, progress=bar_wanted(args))
+    done(args.output, _tracks_summary(args.output), audio_seconds(args.output))
     return 0
 
 
 def _tracks_summary(path: str) -> str:
-    """``N track(s), M points written`` (``no tracks (no measurements), empty table written``
-    for an empty result), read from the tracks file just written."""
+    """``N tracks, M points`` (``no tracks (…): empty tracks table`` for an empty result), read
+    from the tracks file just written, for the summary line."""
     import numpy as np
 
     from arrayproc.io.products import read_products
@@ -591,26 +595,39 @@ def _tracks_summary(path: str) -> str:
            if "track_id" in prod[n]]
     n_pts = sum(i.size for i in ids)
     if n_pts == 0:
-        return "no tracks (no measurements to track), empty tracks table written"
+        return "no tracks (no measurements to track): empty tracks table"
     n_tr = sum(np.unique(i).size for i in ids)
-    return f"{n_tr} track(s), {n_pts} points written"
+    return f"{n_tr} track{'s' * (n_tr != 1)}, {n_pts} points"
 
 
 def _run_tma(args: argparse.Namespace) -> int:
-    tma(args.products, args.config, args.output, progress=progress_wanted(args))
-    print(f"{args.output}: tma written")
+    done = Summary.of(args)
+    tma(args.products, args.config, args.output, progress=bar_wanted(args))
+    done(args.output, products_what(args.output), audio_seconds(args.output))
     return 0
 
 
 def _run_export(args: argparse.Namespace) -> int:
+    done = Summary.of(args)
     n = export(args.files, args.to, args.output, origin=tuple(args.origin))
-    print(f"{args.output}: {n} {'selections' if args.to == 'raven' else 'lines'} written")
+    audio = [audio_seconds(f) for f in args.files]
+    done(args.output, f"{n} {'selections' if args.to == 'raven' else 'lines'}",
+         sum(audio) if all(a is not None for a in audio) else None)
     return 0
+
+
+def _run_data_dir(args: argparse.Namespace) -> int:
+    from arrayproc.data import data_path
+    print(data_path())
+    return 0
+
+
+QUIET_HELP = "no summary line at the end"
 
 
 def add_parser(sub: Any) -> None:
     """Register this module's sub-commands (info, process, import, simulate, plot, track, tma,
-    export) on the command line's sub-parsers (the demo registers itself, app/demo.py)."""
+    export, data-dir) on the command line's sub-parsers (the demo registers itself, app/demo.py)."""
     s = sub.add_parser("info", help="describe a recording or products file")
     s.add_argument("file")
     add_geometry_options(s)
@@ -622,7 +639,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-c", "--chain", required=True, help="chain TOML file")
     s.add_argument("-o", "--output", required=True, help="products HDF5 file to write")
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
-    s.add_argument("-q", "--quiet", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     s.add_argument("--max-memory", default=None, metavar="SIZE",
                    help="refuse a chain whose estimated working memory exceeds SIZE (bytes, or "
                         "with a unit: 500M, 4G; default: half the machine's RAM)")
@@ -640,7 +657,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--sound-speed", type=float, default=1500.0, help="m/s (default 1500)")
     s.add_argument("--start-time", default=None, help="ISO-8601 UTC start (default: from the "
                    "file name when it holds one, e.g. 20190920T163858Z)")
-    s.add_argument("-q", "--quiet", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     add_geometry_options(s)
     s.set_defaults(func=_run_import)
 
@@ -650,7 +667,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--seed", type=int, default=None, help="overrides the scenario's seed")
     s.add_argument("--duration", type=float, default=None, help="shorten the scenario (s)")
     s.add_argument("--no-progress", action="store_true")
-    s.add_argument("-q", "--quiet", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     s.set_defaults(func=_run_simulate)
 
     s = sub.add_parser("plot", help="plot a products or tracks file")
@@ -668,6 +685,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-c", "--config", required=True, help="tracker TOML file")
     s.add_argument("-o", "--output", required=True)
     s.add_argument("--no-progress", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     s.set_defaults(func=_run_track)
 
     s = sub.add_parser("tma", help="batch ML target motion analysis (bearings, delays or "
@@ -676,6 +694,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-c", "--config", required=True, help="TMA TOML file")
     s.add_argument("-o", "--output", required=True, help="products HDF5 file to write")
     s.add_argument("--no-progress", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     s.set_defaults(func=_run_tma)
 
     s = sub.add_parser("export", help="write Raven selection tables or Debrief REP files")
@@ -685,5 +704,10 @@ def add_parser(sub: Any) -> None:
     s.add_argument("-o", "--output", required=True, help="text file to write")
     s.add_argument("--origin", type=float, nargs=2, default=(0.0, 0.0),
                    metavar=("LAT", "LON"), help="rep: latitude/longitude of x = y = 0 (deg)")
+    s.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     s.set_defaults(func=_run_export)
+
+    s = sub.add_parser("data-dir", help="print the folder of the bundled chains, scenarios, "
+                       "trackers and TMA configurations")
+    s.set_defaults(func=_run_data_dir)
 

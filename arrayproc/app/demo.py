@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -163,12 +163,18 @@ def run_demo(outdir: str | os.PathLike = "demo_out", progress: bool = False,
         step(f"plot range_doppler -> {out / 'active_range_doppler.png'}")
         commands.plot(str(prod), str(out / "active_range_doppler.png"), kind="range_doppler",
                       beam=50.0, range_db=30.0)
-    print(f"demo outputs in {out}/", file=sys.stderr)
     return out
 
 
 def _run(args: argparse.Namespace) -> int:
-    run_demo(args.output, progress=commands.progress_wanted(args))
+    from arrayproc.app.progress import Summary, bar_wanted, recording_seconds
+    done = Summary.of(args)
+    since = time.time()
+    out = run_demo(args.output, progress=bar_wanted(args),
+                   echo=commands._quiet if args.quiet else print)
+    made = [p for p in sorted(out.iterdir()) if p.is_file() and p.stat().st_mtime >= since - 1]
+    audio = [a for a in map(recording_seconds, made) if a is not None]
+    done(f"{out}/", f"{len(made)} files, {len(audio)} recordings", sum(audio) or None)
     return 0
 
 
@@ -177,4 +183,6 @@ def add_parser(sub: Any) -> None:
     s = sub.add_parser("demo", help="simulate, process, track and plot the bundled examples")
     s.add_argument("-o", "--output", default="demo_out", help="output directory")
     s.add_argument("--no-progress", action="store_true")
+    s.add_argument("-q", "--quiet", action="store_true",
+                   help="no step lines and no summary line at the end")
     s.set_defaults(func=_run)

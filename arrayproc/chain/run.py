@@ -15,11 +15,14 @@ from arrayproc.io.units import recording_units
 
 def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
               t_start: float | None = None, t_stop: float | None = None,
-              progress: bool = False, log: Callable[[str], None] | None = None) -> int:
+              progress: Callable[[float, float], None] | None = None,
+              log: Callable[[str], None] | None = None) -> int:
     """Run a chain over a recording (or the segment [t_start, t_stop) s of it).
 
     Returns the number of time blocks read. Product rows outside the segment are dropped by
-    the products writer's time window (set it to the same segment).
+    the products writer's time window (set it to the same segment). ``progress``, when given,
+    is called as ``progress(done_s, total_s)`` in seconds of audio after each block read (the
+    command line's bar, :class:`arrayproc.app.progress.AudioBar`).
     """
     ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
     if log is not None:
@@ -39,20 +42,16 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
                                                           int(round((t_stop + margin) * fs)))
     n = count_blocks(recording, spec.block, spec.block, start, stop)
     source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop)
-    bar = None
     if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=n, unit="block", desc="process", leave=False)
-
-        def counted(it: Iterable[Block]) -> Iterator[Block]:
-            for b in it:
-                yield b
-                bar.update(1)
-        source = counted(source)
+        source = _counted(source, progress, spec.block, stop - start, fs)
     leaves, queues = compose(spec, source)
-    try:
-        drive(leaves, queues)
-    finally:
-        if bar is not None:
-            bar.close()
+    drive(leaves, queues)
     return n
+
+
+def _counted(blocks: Iterable[Block], progress: Callable[[float, float], None], block: int,
+             n_samples: int, fs: float) -> Iterator[Block]:
+    """The blocks, calling ``progress(seconds read, seconds to read)`` after each."""
+    for k, b in enumerate(blocks, 1):
+        yield b
+        progress(min(k * block, n_samples) / fs, n_samples / fs)

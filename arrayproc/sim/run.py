@@ -218,39 +218,34 @@ def _write_truth(w: RecordingWriter, groups: dict, attrs: dict) -> None:
     walk("truth", groups)
 
 
-def simulate(scen: Scenario, out_path: str | Path, progress: bool = False,
+def simulate(scen: Scenario, out_path: str | Path,
+             progress: Callable[[float, float], None] | None = None,
              warn: Callable[[str], None] | None = None) -> Path:
-    """Simulate a validated scenario into a recording file (atomic write)."""
+    """Simulate a validated scenario into a recording file (atomic write); ``progress``, when
+    given, is called as ``progress(done_s, total_s)`` in seconds of audio after each chunk."""
     sim = Simulator(scen, warn)
     n = sim.n_samples
     attrs = {"simulator": "arrayproc.sim", "scenario": Path(scen.path).name,
              "seed": scen.seed}
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=n, unit="sample", unit_scale=True, desc="simulate", leave=False)
-    try:
-        with RecordingWriter(out_path, scen.fs, sim.n_channels, positions=sim.nominal,
-                             sound_speed=scen.sound_speed, start_time=scen.start_time,
-                             attrs=attrs) as w:
-            for k0 in range(0, n, scen.chunk):
-                k1 = min(n, k0 + scen.chunk)
-                w.append(sim.render(k0, k1))
-                if bar is not None:
-                    bar.update(k1 - k0)
-            w.set_nav(*sim.nav())
-            if sim.active is not None:
-                w.set_active(*sim.active.recording_active())
-            groups, gattrs = sim.truth()
-            _write_truth(w, groups, gattrs)
-    finally:
-        if bar is not None:
-            bar.close()
+    with RecordingWriter(out_path, scen.fs, sim.n_channels, positions=sim.nominal,
+                         sound_speed=scen.sound_speed, start_time=scen.start_time,
+                         attrs=attrs) as w:
+        for k0 in range(0, n, scen.chunk):
+            k1 = min(n, k0 + scen.chunk)
+            w.append(sim.render(k0, k1))
+            if progress:
+                progress(k1 / scen.fs, n / scen.fs)
+        w.set_nav(*sim.nav())
+        if sim.active is not None:
+            w.set_active(*sim.active.recording_active())
+        groups, gattrs = sim.truth()
+        _write_truth(w, groups, gattrs)
     return Path(out_path)
 
 
 def simulate_file(scenario_path: str | Path, out_path: str | Path, seed: int | None = None,
-                  duration: float | None = None, progress: bool = False,
+                  duration: float | None = None,
+                  progress: Callable[[float, float], None] | None = None,
                   warn: Callable[[str], None] | None = None) -> Path:
     """``arrayproc simulate``: read and validate the scenario, then stream the recording.
 
@@ -264,8 +259,8 @@ def simulate_file(scenario_path: str | Path, out_path: str | Path, seed: int | N
         Overrides ``[recording] seed``; the same seed gives the same bytes.
     duration : float, optional
         Overrides the scenario's duration, s (to shorten it for a quick look).
-    progress : bool
-        Show a progress bar on stderr.
+    progress : callable, optional
+        Called as ``progress(done_s, total_s)`` in seconds of audio after each chunk.
     warn : callable, optional
         Receives warnings as one line each.
 

@@ -263,6 +263,7 @@ def test_local_workers_keep_glibc_malloc_defaults(tmp_path, client):
     import dask
     rec = make_recording(tmp_path / "m.h5", 12.0, 3)
     text = CHAIN.replace("block = 3000", "block = 8192")  # 8192 x 8 float32: 256 KiB blocks
+    client.wait_for_workers(2, timeout=120)  # a test above kills a worker; its nanny restarts it
     assert "note: 2 of 2 workers" in batch.malloc_note(client)
     ours, cluster = batch.start_client(workers=1, threads=1)
     try:
