@@ -6,7 +6,8 @@
 # the suite on the newest releases; `make test-oldest` runs it on Python 3.10 with the oldest
 # releases pyproject.toml admits (its floors), from requirements-oldest.lock.
 PYTHON    ?= python3
-PYTHON310 ?= python3.10
+# A Python 3.10 for test-oldest: on the PATH, or one that pyenv installed.
+PYTHON310 ?= $(shell for p in python3.10 $$(ls -d $${PYENV_ROOT:-$$HOME/.pyenv}/versions/3.10*/bin/python3.10 2>/dev/null) /usr/bin/python3.10; do $$p -c 'import sys; assert sys.version_info[:2] == (3, 10)' 2>/dev/null && { echo $$p; break; }; done)
 EXTRAS    := test,fast,dask,stonesoup
 VENV      := .venv
 PY        := $(VENV)/bin/python
@@ -45,7 +46,7 @@ test-latest:
 
 # Python 3.10 with the floors of pyproject.toml (numpy, scipy, numba, h5py ... at their lowest).
 test-oldest:
-	@command -v $(PYTHON310) >/dev/null || { echo "make: $(PYTHON310) not found (set PYTHON310=...)"; exit 2; }
+	@test -n "$(PYTHON310)" || { echo "make: no Python 3.10 found (set PYTHON310=/path/to/python3.10)"; exit 2; }
 	$(PYTHON310) -m venv .venv-oldest
 	.venv-oldest/bin/python -m pip install --quiet --requirement $(OLDEST) -e .
 	.venv-oldest/bin/python -m pytest -q -p no:cacheprovider
