@@ -285,7 +285,7 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
     from arrayproc.io.recording import Recording
 
     prod = read_products(tracks_path)
-    groups = [g for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "tracks"]
+    groups = list(prod.groups("tracks").values())
     if not groups:
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]
@@ -302,7 +302,8 @@ def evaluate_tracks_file(tracks_path: str, c: float = 1000.0, p: float = 2.0,
             raise FormatError(f"{rec_path}: no /truth/sources to score against")
         names = sorted(srcs)
         meas = read_products(resolve_beside(as_text(root.get("source", "")), tracks_path))
-        mgroups = {as_text(m.get("kind")): m for n, m in meas.items() if n != "/"}
+        mb = list(meas.groups("bearings").values())
+        mgroups = {"bearings": mb[-1]} if mb else {}  # the last bearings group
         bearing = "cone_deg" in g
         if bearing and "bearings" in mgroups:
             mt = np.asarray(mgroups["bearings"]["time"], float)

@@ -100,12 +100,12 @@ def _detections(r: Any) -> Iterable[tuple[dt.datetime, set]]:
     from arrayproc.track.single import ownship_states
 
     prod = read_products(r.path)
-    groups = {str(g.get("kind")): g for n, g in prod.items() if n != "/"}
-    kind = r.kind or next((k for k in ("contacts", "bearings", "positions") if k in groups),
+    kind = r.kind or next((k for k in ("contacts", "bearings", "positions") if prod.groups(k)),
                           None)
-    if kind not in groups:
+    found = list(prod.groups(kind).values()) if kind else []
+    if not found:
         raise FormatError(f"{r.path}: no {kind or 'contacts, bearings or positions'} group")
-    g = groups[kind]
+    g = found[-1]  # the last group of the kind
     start = r.start or _start(r.path)
     t = np.asarray(g["time"], float)
     src, _d, _s, _n = _recording_info(prod["/"], r.path)

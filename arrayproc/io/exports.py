@@ -99,7 +99,7 @@ def raven_rows(paths: Sequence[str]) -> list[dict[str, object]]:
         for gname, g in prod.items():
             if gname == "/":
                 continue
-            kind = as_text(g.get("kind"))
+            kind = g.kind
             if kind == "detections":
                 for k in ("time_start", "time_end", "freq_lo", "freq_hi"):
                     if k not in g:
@@ -259,7 +259,7 @@ def write_rep(path: str, out: str, origin: tuple[float, float] = (0.0, 0.0),
     _src, _dur, start_iso, _ = _recording_info(root, path)
     lines = [f";; arrayproc export of {os.path.basename(path)}; origin {origin[0]:.6f} "
              f"{origin[1]:.6f}"]
-    groups = {as_text(g.get("kind")): g for n, g in prod.items() if n != "/"}
+    groups = {k: g for k in ("tracks", "bearings") for g in prod.groups(k).values()}  # the last
     if "tracks" in groups:
         if not start_iso:
             rec = as_text(root.get("recording", ""))

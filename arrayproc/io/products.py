@@ -9,6 +9,7 @@ renamed only when the run finished, with root attr ``complete = True``.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any
 
 import h5py
@@ -16,8 +17,8 @@ import numpy as np
 
 from arrayproc.errors import FormatError
 from arrayproc.io.atomic import AtomicH5Writer, check_stop
-from arrayproc.io.recording import open_h5
-from arrayproc.io.schema import KINDS, check_columns, check_group, empty_columns
+from arrayproc.io.h5 import get_object, open_h5
+from arrayproc.io.schema import KINDS, check_columns, check_group, empty_columns, groups_of_kind
 from arrayproc.io.schema import kind as schema_kind
 from arrayproc.io.text import as_text
 
@@ -184,6 +185,27 @@ def product_kinds(path: str | os.PathLike) -> list[str]:
                 if isinstance(g, h5py.Group)]
 
 
+def group_names(f: h5py.File, kind: str) -> list[str]:
+    """Names of the groups of ``kind`` in an open products file, in file order, without reading
+    any data (the shape checks of the commands; :meth:`ProductsFile.groups` on a read file).
+
+    Parameters
+    ----------
+    f : h5py.File
+        An open products file.
+    kind : str
+        A declared product kind (FormatError otherwise).
+
+    Returns
+    -------
+    list of str
+    """
+    schema_kind(kind)
+    where = Path(f.filename)
+    return [n for n in f if isinstance(get_object(f, where, n), h5py.Group)
+            and _attr_str(f[n].attrs.get("kind", "")) == kind]
+
+
 def products_source(path: str | os.PathLike) -> str:
     """The root attribute ``source`` of a products file (the recording it was made from)."""
     with open_h5(path, "products file") as f:
@@ -200,7 +222,59 @@ def _attr_str(v: Any) -> str:
     return str(v) if isinstance(v, (np.generic, int, float)) else ""
 
 
-def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
+class ProductGroup(dict):
+    """One products group as read: ``{"kind", "stage", "attrs", dataset: array}``, with its
+    ``name`` and its ``kind`` as text."""
+
+    def __init__(self, name: str, data: dict[str, Any]) -> None:
+        super().__init__(data)
+        self.name = name
+
+    @property
+    def kind(self) -> str:
+        """The group's product kind (:mod:`arrayproc.io.schema`)."""
+        return as_text(self.get("kind", ""))
+
+
+class ProductsFile(dict):
+    """A products file as read by :func:`read_products`: ``{name: ProductGroup}`` in file
+    order, with the root attributes under the key ``"/"`` (also :attr:`root`).
+
+    :meth:`groups` is the one way to find the groups of a kind.
+    """
+
+    def __init__(self, path: str, root: dict[str, Any]) -> None:
+        super().__init__({"/": root})
+        self.path = path
+
+    @property
+    def root(self) -> dict[str, Any]:
+        """The file's root attributes."""
+        return self["/"]
+
+    def groups(self, kind: str) -> dict[str, ProductGroup]:
+        """The groups of one product kind, in file order.
+
+        Parameters
+        ----------
+        kind : str
+            A kind declared in :mod:`arrayproc.io.schema` (FormatError otherwise: a misspelt
+            kind is refused, not answered with no group).
+
+        Returns
+        -------
+        dict
+            ``{name: ProductGroup}``, empty when the file has no group of that kind.
+        """
+        schema_kind(kind)
+        return {n: self[n] for n in groups_of_kind(self, kind)}
+
+    def kinds(self) -> list[str]:
+        """The kind of every group, in file order."""
+        return [as_text(g.get("kind")) for n, g in self.items() if n != "/"]
+
+
+def read_products(path: str | os.PathLike) -> ProductsFile:
     """Every group of a products file, its columns checked against :mod:`arrayproc.io.schema`.
 
     Parameters
@@ -210,9 +284,9 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
 
     Returns
     -------
-    dict
+    ProductsFile
         ``{name: {"kind", "stage", "attrs", dataset: array}}``; the root attributes are under
-        the key ``"/"``.
+        the key ``"/"``; ``.groups(kind)`` selects the groups of one kind.
 
     Raises
     ------
@@ -223,7 +297,7 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
         fmt = f.attrs.get("format", "")
         if as_text(fmt) != FORMAT:
             raise FormatError(f"{path}: not an arrayproc products file")
-        out: dict[str, dict[str, Any]] = {"/": dict(f.attrs)}
+        out = ProductsFile(str(path), dict(f.attrs))
         for name, g in f.items():
             if not isinstance(g, h5py.Group):
                 continue
@@ -234,7 +308,7 @@ def read_products(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
                     d[k] = v[()]
             check_group(name, d, str(path))
             _fill_empty_group(d)
-            out[name] = d
+            out[name] = ProductGroup(name, d)
         return out
 
 

@@ -1,14 +1,17 @@
-"""Recording files (DESIGN section 3): a streaming reader into blocks and a streaming writer.
+"""Recording files (DESIGN section 3): a streaming reader into blocks.
 
 The reader pulls ``/time_data`` by HDF5 hyperslabs of a fixed size (a few MB), so memory is
 bounded by the slab and block sizes, never by the file length. Files in acoular's layout (only
 ``/time_data`` with ``sample_freq``) open too, with the geometry given by the caller.
+
+The writer (:mod:`arrayproc.io.recording_writer`), the ``/active`` reader
+(:mod:`arrayproc.io.pings`) and the defensive HDF5 helpers (:mod:`arrayproc.io.h5`) live in
+their own modules; their names are importable from here too.
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,141 +21,20 @@ import numpy as np
 from arrayproc.errors import FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.geo.pose import Pose
-from arrayproc.io.atomic import AtomicH5Writer, check_stop
 from arrayproc.io.geometry import body_to_world
+from arrayproc.io.h5 import _attr_str, attr_number, attr_str, get_object, open_h5, read_numeric
+from arrayproc.io.pings import ActivePings, Replica, read_active
+from arrayproc.io.recording_writer import (
+    DEFAULT_SOUND_SPEED,
+    FORMAT,
+    FORMAT_VERSION,
+    RecordingWriter,
+)
 from arrayproc.io.units import file_units
 
-FORMAT = "arrayproc.recording"
-FORMAT_VERSION = 1
-DEFAULT_SOUND_SPEED = 1500.0
-
-
-def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
-    """Open an HDF5 file read-only, turning every failure into one clear FormatError."""
-    path = Path(path)
-    if not path.exists():
-        raise FormatError(f"{path}: no such {what}")
-    if path.is_dir():
-        raise FormatError(f"{path}: is a directory, not an HDF5 {what}")
-    if not path.is_file():
-        import stat
-        mode = path.stat().st_mode
-        kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
-                else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "special")
-        raise FormatError(f"{path}: is {kind}, not a regular HDF5 {what}")
-    try:
-        if not h5py.is_hdf5(path):
-            raise FormatError(f"{path}: not an HDF5 file")
-        return h5py.File(path, "r")
-    except FormatError:
-        raise
-    except PermissionError:
-        raise FormatError(f"{path}: permission denied") from None
-    except OSError as e:
-        text = str(e)
-        if "lock" in text or "already open" in text or "errno = 11" in text:
-            raise FormatError(f"{path}: the file is held open by a writer (it may still be "
-                              "being written); try again when the writer has finished") from None
-        raise FormatError(f"{path}: cannot open HDF5 file (truncated or corrupt, or still "
-                          f"being written?): {text.splitlines()[0] if text else e!r}") from None
-
-
-def _attr_str(v: Any) -> str:
-    if isinstance(v, np.ndarray) and v.size == 1:
-        v = v.reshape(-1)[0]
-    return v.decode(errors="replace") if isinstance(v, bytes) else str(v)
-
-
-def attr_number(p: Path, obj: Any, key: str, default: float | None = None) -> float:
-    """A numeric attribute (a number or a one-element numeric array) as a float.
-
-    Strings, empty arrays, arrays of several values and non-numeric types raise one
-    FormatError naming the file and the attribute.
-    """
-    if key not in obj.attrs:
-        if default is None:
-            raise FormatError(f"{p}: attribute {key!r} is missing")
-        return float(default)
-    try:
-        v = obj.attrs[key]
-    except (OSError, TypeError, ValueError) as e:
-        raise FormatError(f"{p}: attribute {key!r} cannot be read ({e})") from None
-    a = np.asarray(v)
-    if a.dtype.kind not in "fiub" or a.size != 1:
-        raise FormatError(f"{p}: attribute {key!r} must be one number, got {_show(v)}")
-    return float(a.reshape(-1)[0])
-
-
-def _show(v: Any) -> str:
-    text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-def get_object(f: h5py.File, p: Path, name: str, kind: type | None = None) -> Any:
-    """The object at ``name`` (None when absent); dangling soft or external links and objects
-    of the wrong kind (a dataset where a group belongs, or the reverse) raise FormatError."""
-    try:
-        link = f.get(name, getlink=True)
-    except (KeyError, OSError, ValueError, TypeError):
-        link = None
-    if link is None:
-        return None
-    try:
-        obj = f[name]
-    except (KeyError, OSError, ValueError) as e:
-        what = ("external link" if isinstance(link, h5py.ExternalLink) else "soft link"
-                if isinstance(link, h5py.SoftLink) else "object")
-        raise FormatError(f"{p}: /{name.lstrip('/')} is a dangling {what} ({e})") from None
-    if kind is not None and not isinstance(obj, kind):
-        want = "a group" if kind is h5py.Group else "a dataset"
-        raise FormatError(f"{p}: /{name.lstrip('/')} must be {want}")
-    return obj
-
-
-def read_numeric(f: h5py.File, p: Path, name: str, required: bool = False) -> np.ndarray | None:
-    """A numeric dataset as a float64 array (None when absent and not required)."""
-    d = get_object(f, p, name, h5py.Dataset)
-    if d is None:
-        if required:
-            raise FormatError(f"{p}: /{name} is missing")
-        return None
-    if d.dtype.kind not in "fiub":
-        raise FormatError(f"{p}: /{name} must be numeric, has type {d.dtype}")
-    if d.size > 50_000_000:
-        raise FormatError(f"{p}: /{name} is implausibly large ({d.shape})")
-    try:
-        return np.asarray(d[()], dtype=float)
-    except (OSError, ValueError, TypeError) as e:
-        raise FormatError(f"{p}: /{name} cannot be read ({e})") from None
-
-
-@dataclass(frozen=True)
-class Replica:
-    """A transmitted waveform from ``/active/waveforms/<name>`` (DESIGN section 4).
-
-    ``samples`` float64 at ``fs`` (the recording's rate), sample 0 at the transmission start;
-    ``kind`` (bpsk, hfm, cw, lfm or other), ``fc`` centre frequency (Hz), ``bandwidth`` (Hz),
-    ``duration`` (s), ``bits`` (BPSK, else 0).
-    """
-
-    samples: np.ndarray
-    fs: float
-    kind: str
-    fc: float
-    bandwidth: float
-    duration: float
-    bits: int = 0
-
-
-@dataclass(frozen=True)
-class ActivePings:
-    """The ping schedule of ``/active``: transmission times (s), the waveform name of each
-    ping, the replicas by name and the projector's body-frame position (m)."""
-
-    time: np.ndarray
-    waveform: list[str]
-    waveforms: dict[str, Replica]
-    projector: np.ndarray
+__all__ = ["DEFAULT_SOUND_SPEED", "FORMAT", "FORMAT_VERSION", "ActivePings", "Recording",
+           "RecordingWriter", "Replica", "_attr_str", "attr_number", "attr_str", "get_object",
+           "open_h5", "read_numeric"]
 
 
 class Recording:
@@ -210,7 +92,7 @@ class Recording:
         if not np.isfinite(self.fs) or self.fs <= 0:
             raise FormatError(f"{p}: sample_freq must be a positive number, got {self.fs}")
         self.units = file_units(td.attrs)  # "Pa" when absent (io/units.py)
-        fmt = _attr_str(f.attrs.get("format", ""))
+        fmt = attr_str(f.attrs.get("format", ""))
         self.layout = "arrayproc" if fmt == FORMAT else "acoular"
         self.format_version = None
         if fmt == FORMAT:
@@ -226,7 +108,7 @@ class Recording:
                             attr_number(p, f, "sound_speed", DEFAULT_SOUND_SPEED))
         if not (np.isfinite(self.sound_speed) and self.sound_speed > 0):
             raise FormatError(f"{p}: sound_speed must be positive, got {self.sound_speed}")
-        self.start_time = _attr_str(f.attrs["start_time"]) if "start_time" in f.attrs else None
+        self.start_time = attr_str(f.attrs["start_time"]) if "start_time" in f.attrs else None
 
         # Geometry of all channels, then the active subset.
         get_object(f, p, "array", h5py.Group)
@@ -338,47 +220,9 @@ class Recording:
         return walk(g, name)
 
     def active(self) -> ActivePings | None:
-        """The ``/active`` ping schedule and replicas (DESIGN section 4), or None without it.
-
-        ``/active/pings/waveform`` may index the sorted waveform names or hold the names.
-        """
-        if "active" not in self._f:
-            return None
-        g, p = self._f["active"], self.path
-        try:
-            names = sorted(g["waveforms"].keys())
-            t = np.asarray(g["pings/time"][()], float).reshape(-1)
-            wv = np.asarray(g["pings/waveform"][()]).reshape(-1)
-        except KeyError as e:
-            raise FormatError(f"{p}: /active needs waveforms/, pings/time and pings/waveform "
-                              f"({e})") from None
-        if wv.shape != t.shape or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-            raise FormatError(f"{p}: /active/pings/time must increase and match "
-                              "/active/pings/waveform")
-        if wv.dtype.kind in "iu":
-            if wv.size and (wv.min() < 0 or wv.max() >= len(names)):
-                raise FormatError(f"{p}: /active/pings/waveform indexes a missing waveform")
-            which = [names[int(i)] for i in wv]
-        else:
-            which = [_attr_str(v) for v in wv]
-            bad = [n for n in which if n not in names]
-            if bad:
-                raise FormatError(f"{p}: /active/pings/waveform names {bad[0]!r}, not in "
-                                  "/active/waveforms")
-        reps = {}
-        for n in names:
-            d = g["waveforms"][n]
-            a = d.attrs
-            try:
-                reps[n] = Replica(np.asarray(d[()], float).reshape(-1), self.fs,
-                                  _attr_str(a["kind"]), float(a["fc"]), float(a["bandwidth"]),
-                                  float(a["duration"]), int(a.get("bits", 0)))
-            except KeyError as e:
-                raise FormatError(f"{p}: /active/waveforms/{n} lacks attribute {e}") from None
-        proj = np.asarray(g.attrs.get("projector", np.zeros(3)), float).reshape(-1)
-        if proj.shape != (3,):
-            raise FormatError(f"{p}: /active attribute projector must hold 3 numbers")
-        return ActivePings(t, which, reps, proj)
+        """The ``/active`` ping schedule and replicas (DESIGN section 4), or None without it
+        (:func:`arrayproc.io.pings.read_active`)."""
+        return read_active(self._f, self.path, self.fs)
 
     # -- data ----------------------------------------------------------------------------
     def read(self, start: int = 0, stop: int | None = None,
@@ -430,110 +274,3 @@ class Recording:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-class RecordingWriter(AtomicH5Writer):
-    """Streams a recording to disk: ``append`` chunks of samples, then ``close``.
-
-    The file is written under a temporary name in the target directory and renamed on a
-    successful close; on an exception inside a ``with`` block it is removed, so a reader never
-    sees a half-written recording.
-    """
-
-    def __init__(self, path: str | os.PathLike, fs: float, n_channels: int,
-                 positions: np.ndarray | None = None, sound_speed: float = DEFAULT_SOUND_SPEED,
-                 start_time: str | None = None, dtype: np.dtype | type = np.float32,
-                 units: str = "Pa", chunk_samples: int | None = None,
-                 attrs: dict[str, Any] | None = None) -> None:
-        super().__init__(path, fs, n_channels, positions, sound_speed, start_time, dtype,
-                         units, chunk_samples, attrs)
-
-    def _start(self, fs: float, n_channels: int, positions: np.ndarray | None,
-               sound_speed: float, start_time: str | None, dtype: np.dtype | type, units: str,
-               chunk_samples: int | None, attrs: dict[str, Any] | None) -> None:
-        if not (np.isfinite(fs) and fs > 0):
-            raise FormatError(f"{self.path}: sample rate must be a finite number > 0 Hz, "
-                              f"got {fs}")
-        if not (np.isfinite(sound_speed) and sound_speed > 0):
-            raise FormatError(f"{self.path}: sound speed must be a finite number > 0 m/s, "
-                              f"got {sound_speed}")
-        if positions is not None and not np.all(np.isfinite(np.asarray(positions, float))):
-            raise FormatError(f"{self.path}: array positions contain NaN or Inf")
-        self._f.attrs["format"] = FORMAT
-        self._f.attrs["format_version"] = FORMAT_VERSION
-        self._f.attrs["sound_speed"] = float(sound_speed)
-        if start_time is not None:
-            self._f.attrs["start_time"] = start_time
-        for k, v in (attrs or {}).items():
-            self._f.attrs[k] = v
-        if chunk_samples is None:  # about 1 MiB chunks, contiguous in time
-            chunk_samples = max(256, (1 << 20) // (np.dtype(dtype).itemsize * n_channels))
-        self._td = self._f.create_dataset(
-            "time_data", shape=(0, n_channels), maxshape=(None, n_channels), dtype=dtype,
-            chunks=(int(chunk_samples), n_channels))
-        self._td.attrs["sample_freq"] = float(fs)
-        self._td.attrs["units"] = units
-        if positions is not None:
-            self._f.create_dataset("array/positions", data=np.asarray(positions, float))
-        self.n_samples = 0
-
-    def append(self, data: np.ndarray) -> None:
-        """Append samples (n, n_channels)."""
-        check_stop()
-        n = data.shape[0]
-        self._td.resize(self.n_samples + n, axis=0)
-        self._td[self.n_samples:self.n_samples + n] = data
-        self.n_samples += n
-
-    def set_nav(self, time: np.ndarray, position: np.ndarray, heading: np.ndarray,
-                depth: np.ndarray | None = None) -> None:
-        """Write ``/nav`` (time s, position (n,2) m, heading deg true, optional depth m)."""
-        g = self._f.require_group("nav")
-        g.create_dataset("time", data=np.asarray(time, float))
-        g.create_dataset("position", data=np.asarray(position, float))
-        g.create_dataset("heading", data=np.asarray(heading, float))
-        if depth is not None:
-            g.create_dataset("depth", data=np.asarray(depth, float))
-
-    def set_array(self, gains: np.ndarray | None = None, dead: np.ndarray | None = None) -> None:
-        """Write optional ``/array/gains`` and ``/array/dead``."""
-        if gains is not None:
-            self._f.create_dataset("array/gains", data=np.asarray(gains, float))
-        if dead is not None:
-            self._f.create_dataset("array/dead", data=np.asarray(dead, bool))
-
-    def set_active(self, time: np.ndarray, waveform: np.ndarray,
-                   waveforms: dict[str, tuple[np.ndarray, dict[str, Any]]],
-                   projector: np.ndarray) -> None:
-        """Write ``/active`` (DESIGN section 4): ping times (s), each ping's index into the
-        sorted waveform names, the replicas ``{name: (samples at fs, attrs)}`` with attrs
-        ``kind``, ``fc``, ``bandwidth``, ``duration`` (and ``bits``), the projector (m)."""
-        g = self._f.require_group("active")
-        g.attrs["projector"] = np.asarray(projector, float).reshape(3)
-        for name, (x, attrs) in waveforms.items():
-            d = g.create_dataset(f"waveforms/{name}", data=np.asarray(x, float))
-            for k, v in attrs.items():
-                d.attrs[k] = v
-        g.create_dataset("pings/time", data=np.asarray(time, float))
-        g.create_dataset("pings/waveform", data=np.asarray(waveform, np.int64))
-
-    def write_group(self, name: str, datasets: dict[str, Any],
-                    attrs: dict[str, Any] | None = None) -> None:
-        """Write a group of datasets (nested dicts make subgroups), e.g. ``truth/sources/a``."""
-        check_stop()
-        for part in name.split("/"):
-            if part in ("", ".", ".."):
-                raise FormatError(f"{self.path}: group name {name!r} has an empty, '.' or '..' "
-                                  "part")
-        for k in datasets:
-            if not isinstance(k, str) or not k or "/" in k or k in (".", ".."):
-                raise FormatError(f"{self.path}: {name}: dataset name {k!r} is not a plain "
-                                  "name (no '/', not empty, '.' or '..')")
-        g = self._f.require_group(name)
-        for k, v in (attrs or {}).items():
-            g.attrs[k] = v
-        for k, v in datasets.items():
-            if isinstance(v, dict):
-                self.write_group(f"{name}/{k}", v)
-            else:
-                g.create_dataset(k, data=v)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from arrayproc.errors import FormatError
+from arrayproc.io.text import as_text
 
 
 @dataclass(frozen=True)
@@ -296,7 +297,9 @@ def empty_columns(kind_name: str) -> dict[str, Any]:
 
 
 def groups_of_kind(groups: Mapping[str, Mapping[str, Any]], kind_name: str) -> list[str]:
-    """Names of the groups of one kind in a products file read by ``read_products``.
+    """Names of the groups of one kind in a products file read by ``read_products``, in file
+    order (the kind attribute as ``str`` or ``bytes``); the filter behind
+    :meth:`arrayproc.io.products.ProductsFile.groups`.
 
     Parameters
     ----------
@@ -309,7 +312,7 @@ def groups_of_kind(groups: Mapping[str, Mapping[str, Any]], kind_name: str) -> l
     -------
     list of str
     """
-    return [n for n, g in groups.items() if n != "/" and g.get("kind") == kind_name]
+    return [n for n, g in groups.items() if n != "/" and as_text(g.get("kind")) == kind_name]
 
 
 def markdown_table() -> str:

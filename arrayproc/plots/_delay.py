@@ -14,17 +14,12 @@ from arrayproc.errors import ArrayprocError, FormatError
 def groups_of(path: str, kind: str) -> tuple[list[tuple[str, dict[str, Any]]], dict[str, Any]]:
     """Every products group of ``kind`` (name, columns) and the root attributes."""
     from arrayproc.io.products import read_products
-    groups = read_products(path)
-    root = groups.pop("/")
-    found = []
-    for name, g in groups.items():
-        k = g["kind"]
-        if (k.decode() if isinstance(k, bytes) else str(k)) == kind:
-            found.append((name, g))
+    prod = read_products(path)
+    found = list(prod.groups(kind).items())
     if not found:
-        kinds = sorted({str(g["kind"]) for g in groups.values()})
-        raise ArrayprocError(f"{path}: no {kind} product (kinds: {', '.join(kinds)})")
-    return found, root
+        raise ArrayprocError(f"{path}: no {kind} product (kinds: "
+                             f"{', '.join(sorted(set(prod.kinds())))})")
+    return found, prod.root
 
 
 def source_recording(root: dict[str, Any], path: str, what: str):

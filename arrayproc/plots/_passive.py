@@ -13,16 +13,13 @@ from arrayproc.errors import ArrayprocError, FormatError
 def find_group(path: str, kind: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """The first products group of ``kind`` and the root attributes."""
     from arrayproc.io.products import read_products
-    groups = read_products(path)
-    root = groups.pop("/")
-    for g in groups.values():
-        k = g["kind"]
-        if (k.decode() if isinstance(k, bytes) else str(k)) == kind:
-            if "time" not in g:
-                raise ArrayprocError(f"{path}: {kind} product is empty (no rows)")
-            return g, root
+    prod = read_products(path)
+    for g in prod.groups(kind).values():
+        if "time" not in g:
+            raise ArrayprocError(f"{path}: {kind} product is empty (no rows)")
+        return g, prod.root
     raise ArrayprocError(f"{path}: no {kind} product (kinds: "
-                         f"{', '.join(sorted({str(g['kind']) for g in groups.values()}))})")
+                         f"{', '.join(sorted(set(prod.kinds())))})")
 
 
 def robust_top(x: np.ndarray) -> float:

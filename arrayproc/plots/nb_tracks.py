@@ -161,13 +161,9 @@ def plot_nb_tracks(path: str, out_png: str, truth: bool = True, **_other: Any) -
     ``beam``) do not apply and are ignored."""
     from arrayproc.io.products import read_products
 
-    groups = read_products(path)
-    root = groups.pop("/")
-    tracks = {}
-    for name, g in groups.items():
-        k = g["kind"]
-        if (k.decode() if isinstance(k, bytes) else str(k)) == "nb_tracks" and "time" in g:
-            tracks[name] = g
+    prod = read_products(path)
+    root = prod.root
+    tracks = {name: g for name, g in prod.groups("nb_tracks").items() if "time" in g}
     if not tracks:
         raise ArrayprocError(f"{path}: no nb_tracks product with rows")
     first = next(iter(tracks.values()))

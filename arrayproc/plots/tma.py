@@ -58,7 +58,7 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
     from arrayproc.track.batch.td_tma import delay_model
 
     prod = read_products(path)
-    names = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "tma"]
+    names = list(prod.groups("tma"))
     if not names:
         raise FormatError(f"{path}: no tma group")
     g = prod[names[0]]

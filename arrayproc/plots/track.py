@@ -52,7 +52,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     from arrayproc.io.products import read_products
 
     prod = read_products(tracks_path)
-    groups = [g for n, g in prod.items() if n != "/" and g.get("kind") == "tracks"]
+    groups = list(prod.groups("tracks").values())
     if not groups:
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]

@@ -135,7 +135,7 @@ def load_single_config(path: str) -> dict[str, Any]:
 def _read_bearings(prod: dict, name: str | None, products_path: str,
                    cone_gate: list[float] | None = None,
                    level: str | None = None) -> dict[str, np.ndarray]:
-    groups = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == "bearings"]
+    groups = list(prod.groups("bearings"))
     if name is not None:
         if name not in prod or name == "/":
             raise FormatError(f"{products_path}: no group {name!r}")

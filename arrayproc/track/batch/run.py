@@ -189,7 +189,7 @@ def _group(prod: dict, kind: str, name: str, path: str) -> tuple[str, dict]:
             raise FormatError(f"{path}: group {name!r} is of kind "
                               f"{as_text(prod[name].get('kind'))!r}, not {kind!r}")
         return name, prod[name]
-    names = [n for n, g in prod.items() if n != "/" and as_text(g.get("kind")) == kind]
+    names = list(prod.groups(kind))
     if not names:
         raise FormatError(f"{path}: no {kind} group")
     if len(names) > 1:
