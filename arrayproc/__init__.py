@@ -9,9 +9,14 @@ The curated API (imported on first use, so ``import arrayproc`` stays cheap)::
         ap.run_chain(rec, chain, out)
     groups = ap.read_products("out.h5")
 
-Stage classes (``CBF``, ``DFTFilter``, ...), tracking components (``ConstantVelocity``,
-``Bearing``, ``make_filter``) and the simulator (``simulate_file``) are reachable the same way;
-the full list is ``arrayproc.__all__``.
+Every stage class (one per chain ``type``: ``CBF``, ``DFTFilter``, ``ETAM``, ``Cfar``, ...),
+every motion and measurement model (``ConstantVelocity``, ``Bearing``, ``TDOA``, ...), every
+filter (``EKF``, ``UKF``, ``RPF``, ... and ``make_filter``), every batch TMA method
+(``solve_bearings``, ``solve_delays``, ``solve_compact``, ...), the products reader
+(``read_products`` -> ``ProductsFile`` with ``.groups(kind)``), the plots (``plot_file`` and
+the ``draw_*`` functions that draw on a matplotlib ``Axes``) and the simulator
+(``simulate_file``) are reachable the same way; the full list is ``arrayproc.__all__``. Each
+name is defined once: ``arrayproc.X`` is the object of the module listed in ``_API``.
 """
 
 from __future__ import annotations
@@ -33,22 +38,62 @@ _API = {
     "Recording": "arrayproc.io.recording",
     "RecordingWriter": "arrayproc.io.recording",
     "ProductsWriter": "arrayproc.io.products",
+    "ProductsFile": "arrayproc.io.products",
+    "ProductGroup": "arrayproc.io.products",
     "read_products": "arrayproc.io.products",
-    # stages
+    # stages: one class per chain type (arrayproc.stages.TYPES; a test keeps them equal)
     "DFTFilter": "arrayproc.stages.condition.dft_filter",
     "CBF": "arrayproc.stages.beamform.cbf",
     "IBF": "arrayproc.stages.beamform.ibf",
+    "PSAS": "arrayproc.stages.beamform.etam",
+    "ETAM": "arrayproc.stages.beamform.etam",
     "Integrate": "arrayproc.stages.passive.integrate",
     "BTR": "arrayproc.stages.passive.btr",
     "LOFAR": "arrayproc.stages.passive.lofar",
     "Bearings": "arrayproc.stages.passive.bearings",
-    # simulation and tracking
+    "Power": "arrayproc.stages.passive.power",
+    "PassThrough": "arrayproc.stages.passive.power",
+    "Transients": "arrayproc.stages.delay.transients",
+    "Tde": "arrayproc.stages.delay.tde",
+    "Localise": "arrayproc.stages.delay.localise_stage",
+    "ActiveBeams": "arrayproc.stages.active.ping_beams",
+    "MatchedFilter": "arrayproc.stages.active.matched_filter",
+    "Cfar": "arrayproc.stages.active.detect",
+    "NarrowbandEKFStage": "arrayproc.stages.narrowband.nb_ekf",
+    # simulation
     "simulate_file": "arrayproc.sim.run",
+    # tracking: runners, models, filters
     "run_tracker": "arrayproc.track.runner",
-    "make_filter": "arrayproc.track.filters",
+    "load_tracker_config": "arrayproc.track.runner",
+    "MotionModel": "arrayproc.track.models",
+    "MeasurementModel": "arrayproc.track.models",
     "ConstantVelocity": "arrayproc.track.models",
     "ConstantTurn": "arrayproc.track.models",
+    "make_model": "arrayproc.track.models",
     "Bearing": "arrayproc.track.models",
+    "MirroredBearing": "arrayproc.track.models",
+    "LevelBearing": "arrayproc.track.models",
+    "TDOA": "arrayproc.track.models",
+    "Filter": "arrayproc.track.filters",
+    "FilterDivergence": "arrayproc.track.filters",
+    "GaussianFilter": "arrayproc.track.filters",
+    "EKF": "arrayproc.track.filters",
+    "UKF": "arrayproc.track.filters",
+    "CKF": "arrayproc.track.filters",
+    "GHF": "arrayproc.track.filters",
+    "SRF": "arrayproc.track.filters",
+    "RPF": "arrayproc.track.filters",
+    "FILTERS": "arrayproc.track.filters",
+    "make_filter": "arrayproc.track.filters",
+    # batch TMA: one solver per method, the driver, the solution
+    "solve_bearings": "arrayproc.track.batch",
+    "solve_line_bearings": "arrayproc.track.batch",
+    "solve_delays": "arrayproc.track.batch",
+    "solve_compact": "arrayproc.track.batch",
+    "TmaSolution": "arrayproc.track.batch",
+    "run_tma": "arrayproc.track.batch.run",
+    # plots
+    "plot_file": "arrayproc.plots",
     "ArrayprocError": "arrayproc.errors",
     "ConfigError": "arrayproc.errors",
     "FormatError": "arrayproc.errors",

@@ -2,7 +2,10 @@
 recordings and products opened in one call.
 
 The engine (:mod:`arrayproc.chain`) knows no stage by name; this layer imports the modules of
-the stages a chain names (:func:`arrayproc.stages.load`) before it is built.
+the stages a chain names (:func:`arrayproc.stages.load`) before it is built. A chain file is
+read only here (:func:`load_chain`; the engine builds from mappings): ``build_chain`` and
+``run_chain`` do what the engine's functions of the same names do, for any chain, plus the
+stage imports and the progress bar.
 """
 
 from __future__ import annotations
@@ -73,7 +76,8 @@ def _load_types(config: Any) -> None:
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
               t_start: float | None = None, t_stop: float | None = None,
-              progress: bool = False, log: Callable[[str], None] | None = None) -> int:
+              progress: bool | Callable[[float, float], None] = False,
+              log: Callable[[str], None] | None = None) -> int:
     """Run a chain over a recording (see :func:`arrayproc.chain.run_chain`).
 
     Parameters
@@ -86,8 +90,10 @@ def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
         Where the stages write their products.
     t_start, t_stop : float, optional
         Segment to process, s since the recording start.
-    progress : bool
-        Show a progress bar on stderr, in seconds of audio.
+    progress : bool or callable
+        True: a progress bar on stderr, in seconds of audio; a callable
+        ``progress(done_s, total_s)`` is called after each block instead (what the engine,
+        :func:`arrayproc.chain.run_chain`, takes).
     log : callable, optional
         Where stages send warnings (default: stderr).
 
@@ -96,6 +102,8 @@ def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
     int
         Number of time blocks read.
     """
+    if callable(progress):
+        return _chain.run_chain(recording, spec, products, t_start, t_stop, progress, log)
     from arrayproc.app.progress import audio_bar
     bar = audio_bar(progress, "process")
     try:

@@ -584,7 +584,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     from arrayproc.app.api import load_chain
-    load_chain(args.chain)  # a bad chain stops here, before a cluster starts
+    load_chain(args.config)  # a bad chain stops here, before a cluster starts
     client, cluster = start_client(args.workers, args.scheduler)
     try:
         n_workers = len(client.scheduler_info().get("workers", {})) or 1
@@ -598,7 +598,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
         note = malloc_note(client) if cluster is None else None
         if note:
             print(f"arrayproc batch: {note}", file=sys.stderr)
-        results = run_batch(inputs, args.chain, args.output, client, args.segment_s,
+        results = run_batch(inputs, args.config, args.output, client, args.segment_s,
                             args.resume, args.seed, threads, args.retries,
                             progress=bar_wanted(args))
     finally:
@@ -621,10 +621,11 @@ def cmd_batch(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """Register ``arrayproc batch`` on the CLI's subparsers."""
+    from arrayproc.app.options import add_config, add_no_progress, add_quiet
     s = sub.add_parser("batch", help="run a chain over many recordings (or segments) on Dask")
     s.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="recordings, glob patterns, or .txt/.lst files of paths")
-    s.add_argument("-c", "--chain", required=True, help="chain TOML file")
+    add_config(s, "chain TOML file", alias="--chain")
     s.add_argument("-o", "--output", required=True, metavar="OUTDIR",
                    help="folder for OUTDIR/<input stem>.h5")
     g = s.add_mutually_exclusive_group()
@@ -638,7 +639,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--seed", type=int, default=0, help="root of the per-task seeds (default 0)")
     s.add_argument("--retries", type=int, default=2,
                    help="retries of a task whose worker died or that failed unexpectedly")
-    s.add_argument("--no-progress", action="store_true", help="no progress bar")
-    s.add_argument("-q", "--quiet", action="store_true", help="no summary line at the end")
+    add_no_progress(s)
+    add_quiet(s)
     s.set_defaults(func=cmd_batch)
 

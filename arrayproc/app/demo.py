@@ -171,7 +171,7 @@ def _run(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     since = time.time()
     out = run_demo(args.output, progress=bar_wanted(args),
-                   echo=commands._quiet if args.quiet else print)
+                   echo=commands.no_echo if args.quiet else print)
     made = [p for p in sorted(out.iterdir()) if p.is_file() and p.stat().st_mtime >= since - 1]
     audio = [a for a in map(recording_seconds, made) if a is not None]
     done(f"{out}/", f"{len(made)} files, {len(audio)} recordings", sum(audio) or None)
@@ -180,9 +180,9 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """Register ``arrayproc demo`` on the command line's sub-parsers."""
+    from arrayproc.app.options import add_no_progress, add_quiet
     s = sub.add_parser("demo", help="simulate, process, track and plot the bundled examples")
     s.add_argument("-o", "--output", default="demo_out", help="output directory")
-    s.add_argument("--no-progress", action="store_true")
-    s.add_argument("-q", "--quiet", action="store_true",
-                   help="no step lines and no summary line at the end")
+    add_no_progress(s)
+    add_quiet(s)  # no step lines and no summary line
     s.set_defaults(func=_run)

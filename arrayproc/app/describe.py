@@ -8,17 +8,37 @@ described (layout, channels, rate, duration) with a note on how to give the geom
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import h5py
 
 from arrayproc.errors import FormatError
-from arrayproc.io.recording import _attr_str, get_object, open_h5
+from arrayproc.io.h5 import _attr_str, get_object, open_h5
 from arrayproc.io.units import file_units, level_label
 
 #: Geometry summaries (line / planar / volumetric, aperture) up to this many elements.
 MAX_GEOMETRY_ELEMENTS = 100_000
+
+
+def info(path: str, positions: Any = None, echo: Callable[[str], None] = print) -> None:
+    """Describe a recording or a products file, cheaply on any file.
+
+    Only attributes, shapes and small datasets are read (never the samples); the aperture of
+    n elements costs O(n) memory.
+
+    Parameters
+    ----------
+    path : str
+        Recording or products HDF5 file.
+    positions : (n, 3) array, optional
+        Geometry for a file that has none (acoular layout).
+    echo : callable
+        Where each line of the description goes.
+    """
+    for line in describe(path, positions):
+        echo(line)
 
 
 def describe(path: str, positions: Any = None) -> list[str]:

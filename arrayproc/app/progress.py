@@ -22,6 +22,18 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+#: Where a command's lines go: ``print``, a logger, or :func:`no_echo`.
+Echo = Callable[[str], None]
+
+
+def stderr_warning(msg: str) -> None:
+    """The commands' default ``warn``: ``arrayproc: warning: msg`` on stderr."""
+    print(f"arrayproc: warning: {msg}", file=sys.stderr)
+
+
+def no_echo(msg: str) -> None:
+    """An ``echo`` that prints nothing (``-q``)."""
+
 
 def bar_wanted(args: argparse.Namespace) -> bool:
     """A progress bar unless ``--no-progress`` or stderr is not a terminal."""

@@ -33,12 +33,12 @@ result of one long run.
 
 
 from arrayproc.chain.block import Block, Pose
-from arrayproc.chain.graph import ChainSpec, build_chain, compose, drive, load_chain, set_rates
+from arrayproc.chain.graph import ChainSpec, build_chain, compose, drive, set_rates
 from arrayproc.chain.run import run_chain
 from arrayproc.chain.segments import warmup_margin
 from arrayproc.chain.stage import STAGES, RunContext, Stage, register
 from arrayproc.config import Param, positive
 
 __all__ = ["Block", "ChainSpec", "Param", "Pose", "RunContext", "STAGES", "Stage", "build_chain",
-           "compose", "drive", "load_chain", "positive", "register", "run_chain", "set_rates",
+           "compose", "drive", "positive", "register", "run_chain", "set_rates",
            "warmup_margin"]

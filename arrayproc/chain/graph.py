@@ -12,7 +12,7 @@ from typing import Any
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
-from arrayproc.config import Param, positive, read_toml, tomllib
+from arrayproc.config import Param, positive, tomllib
 from arrayproc.errors import ConfigError
 
 
@@ -108,15 +108,6 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         inputs.append(src)
         names.add(name)
     return ChainSpec(stages, inputs, block, text)
-
-
-def load_chain(path: str) -> ChainSpec:
-    """Read and validate a chain TOML file."""
-    cfg, text = read_toml(path, "chain")
-    try:
-        return build_chain(cfg, text)
-    except ConfigError as e:
-        raise ConfigError(f"{path}: {e}") from None
 
 
 class _Fanout:

@@ -38,6 +38,10 @@ class Column:
         Sizes of the dimensions after the rows (``(None,)`` for ``tau`` (n, n_ch), ``(4, 4)``
         for a state covariance); None where the size depends on the data (0 in an empty
         table).
+    labels : tuple
+        For each trailing dimension, the axes (static datasets of the kind) that may label
+        it, the first present one used (``(("cone_deg", "bearing_deg"), ("freq",))`` for a
+        LOFAR-gram); empty when no axis labels it.
     """
 
     unit: str
@@ -45,6 +49,7 @@ class Column:
     required: bool = True
     dtype: str = "f8"
     trailing: tuple = ()
+    labels: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -66,11 +71,12 @@ class Kind:
 
 
 def _c(unit: str, doc: str, required: bool = True, dtype: str = "f8",
-       trailing: tuple = ()) -> Column:
-    return Column(unit, doc, required, dtype, trailing)
+       trailing: tuple = (), labels: tuple = ()) -> Column:
+    return Column(unit, doc, required, dtype, trailing, labels)
 
 
 _ANY, _ANY2 = (None,), (None, None)  # trailing sizes set by the data (channels, beams, bins)
+_BEAMS = ("cone_deg", "bearing_deg")  # the axes that label a beam dimension
 
 _BEAM_AXES = {
     "cone_deg": _c("deg", "cone angle of each beam (line arrays)", False),
@@ -85,12 +91,13 @@ _KINDS = [
     }),
     Kind("btr", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
-        "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)", trailing=_ANY),
+        "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)", trailing=_ANY,
+                       labels=(_BEAMS,)),
     }, _BEAM_AXES),
     Kind("lofar", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
         "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)",
-                        trailing=_ANY2),
+                        trailing=_ANY2, labels=(_BEAMS, ("freq",))),
     }, {**_BEAM_AXES, "freq": _c("Hz", "frequency of each bin")}),
     Kind("bearings", "peak on a BTR row or a LOFAR line", {
         "time": _c("s", "centre time of the snapshot"),

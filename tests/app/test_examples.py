@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from arrayproc.chain import load_chain
+from arrayproc.app.api import load_chain
 from arrayproc.data import data_path
 from arrayproc.sim.scenario import load_scenario
 from arrayproc.track.runner import load_tracker_config

@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from arrayproc.chain import load_chain, run_chain
+from arrayproc.app.api import load_chain
+from arrayproc.chain import run_chain
 from arrayproc.data import data_path
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording

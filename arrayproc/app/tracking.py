@@ -1,0 +1,94 @@
+"""``arrayproc track`` and ``arrayproc tma``: measurements of a products file into tracks or
+batch TMA solutions. The configuration is checked first, then the products' columns, and the
+recording the products name (its navigation is read) is among the inputs an output must not
+replace.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from arrayproc.app.inputs import TRACK_INPUT, check_product_input
+from arrayproc.errors import ArrayprocError
+from arrayproc.io.atomic import check_output
+
+
+def track(products: str, config: str, output: str, progress: bool = False) -> None:
+    """Track targets from a products file's bearings into a tracks file.
+
+    Parameters
+    ----------
+    products : str
+        Products HDF5 file with a bearings group.
+    config : str
+        Tracker TOML file.
+    output : str
+        Tracks HDF5 file to write.
+    progress : bool
+        Progress messages on stderr.
+    """
+    inputs = [products, config]
+    rec = _products_source(products)
+    if rec is not None:
+        inputs.append(rec)  # the recording whose navigation the tracker reads
+    check_output(output, inputs)
+    from arrayproc.track.runner import load_tracker_config
+    cfg = load_tracker_config(config)  # configuration errors first, before the products are read
+    if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
+        check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
+    from arrayproc.track.runner import run_tracker
+    run_tracker(products, config, output, progress=progress)
+
+
+def _products_source(products: str) -> str | None:
+    """The recording a products file names in its ``source`` attribute (if it exists)."""
+    try:
+        from arrayproc.io.products import products_source
+        src = products_source(products)
+    except ArrayprocError:
+        return None
+    if not src:
+        return None
+    for p in (Path(src), Path(products).parent / src):  # as the tracker resolves it
+        if p.exists():
+            return str(p)
+    return None
+
+
+# -- tma --------------------------------------------------------------------------------------
+def tma(products: str, config: str, output: str, progress: bool = False) -> None:
+    """Batch maximum-likelihood TMA with its CRLB (thesis 3.3; compact-array paper eqs. 1-5).
+
+    Parameters
+    ----------
+    products : str
+        Products HDF5 file with a bearings or delays group.
+    config : str
+        TMA TOML file (``[tma] method = "bearings" | "delays" | "compact"``, …).
+    output : str
+        Products HDF5 file to write (one ``tma`` group).
+    progress : bool
+        One line per solution on stderr.
+    """
+    inputs = [products, config]
+    rec = _products_source(products)
+    if rec is not None:
+        inputs.append(rec)  # the recording whose navigation and geometry are read
+    check_output(output, inputs)
+    from arrayproc.track.batch.run import run_tma
+    run_tma(products, config, output, progress=progress)
+
+
+def tracks_summary(path: str) -> str:
+    """``N tracks, M points`` (``no tracks (…): empty tracks table`` for an empty result), read
+    from the tracks file just written, for the summary line."""
+    import numpy as np
+
+    from arrayproc.io.products import read_products
+    ids = [np.asarray(g["track_id"]).reshape(-1)
+           for g in read_products(path).groups("tracks").values() if "track_id" in g]
+    n_pts = sum(i.size for i in ids)
+    if n_pts == 0:
+        return "no tracks (no measurements to track): empty tracks table"
+    n_tr = sum(np.unique(i).size for i in ids)
+    return f"{n_tr} track{'s' * (n_tr != 1)}, {n_pts} points"
