@@ -3,26 +3,53 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.io.units import file_units, level_label
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
+
+#: Figure size and resolution of the BTR plot.
+LAYOUT = {"figsize": (7.5, 8.0), "dpi": 110}
 
 
 @register_plot("btr")
 def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None = None,
              truth: bool = True) -> None:
-    """Draw the first ``btr`` group of products file ``path`` into ``out_png``.
-
-    The colour scale spans ``range_db`` dB below the 99.9th percentile of the record. When the
-    recording named by the products' root attribute ``source`` holds ``/truth``, the true cone
-    angles of the sources are drawn as dashed lines. ``beam`` is unused (LOFAR only).
-    """
-    import matplotlib.pyplot as plt
-
+    """Draw the first ``btr`` group of products file ``path`` into ``out_png``
+    (:func:`draw_btr`). ``beam`` is unused (LOFAR only)."""
     g, root = find_group(path, "btr")
+    write_figure(lambda ax: draw_btr(g, root, ax, range_db=range_db, truth=truth,
+                                     name=Path(path).name), out_png, LAYOUT)
+
+
+def draw_btr(g: dict, root: dict, ax: Any = None, range_db: float = 20.0, truth: bool = True,
+             name: str = "") -> Any:
+    """Draw a BTR: cone angle across, time running down.
+
+    Parameters
+    ----------
+    g : dict
+        A ``btr`` products group (``time``, ``cone_deg``, ``power_db``, optional
+        ``elevation_deg``, ``attrs``), as :func:`arrayproc.io.products.read_products` gives.
+    root : dict
+        The products file's root attributes (``units``; ``source``, whose ``/truth`` is drawn).
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure).
+    range_db : float
+        The colour scale spans this many dB below the 99.9th percentile of the record.
+    truth : bool
+        When the recording named by ``source`` holds ``/truth``, draw the true cone angles of
+        the sources as dotted lines.
+    name : str
+        The file name shown under the title.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
     t, cone, p = g["time"], g["cone_deg"], g["power_db"]
     elev = None
     if "elevation_deg" in g:  # 3-D beams: the bearings of the elevation nearest horizontal
@@ -32,7 +59,7 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
         sel = sel[np.argsort(cone[sel])]
         cone, p = cone[sel], p[:, sel]
     top = robust_top(p)
-    fig, ax = plt.subplots(figsize=(7.5, 8.0), dpi=110)
+    fig, ax, new = subplots(ax, LAYOUT)
     if t.size:
         dt = np.median(np.diff(t)) if t.size > 1 else 1.0
         im = ax.imshow(p, aspect="auto", cmap="viridis", vmin=top - range_db, vmax=top,
@@ -58,7 +85,5 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
     ax.set_ylabel("time (s since recording start)")
     lo, hi = g["attrs"].get("freq_lo"), g["attrs"].get("freq_hi")
     band = f", {lo:g}-{hi:g} Hz" if lo is not None else ""
-    ax.set_title(f"BTR{band}\n{Path(path).name}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    ax.set_title(f"BTR{band}\n{name}", fontsize=10)
+    return finish(fig, new, LAYOUT)

@@ -9,31 +9,47 @@ correctly classified as not moving). With truth, clutter contacts are those with
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._passive import find_group
 
 KNOT = 1852.0 / 3600.0
+#: Figure size, resolution and panels of the contacts plot.
+LAYOUT = {"figsize": (12.0, 5.5), "dpi": 110, "nrows": 1, "ncols": 2,
+          "gridspec_kw": {"width_ratios": [1.35, 1.0]}}
 
 
 @register_plot("contacts")
 def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_kn: float = 2.0,
                   snr_min_db: float = 15.0, truth: bool = True, range_db: float | None = None,
                   beam: float | None = None) -> None:
-    """Draw the first ``contacts`` group of ``path`` into ``out_png``.
+    """Draw the first ``contacts`` group of ``path`` into ``out_png`` (:func:`draw_contacts`).
 
     ``range_db`` and ``beam`` (the ``plot`` command's options) are unused here.
+    """
+    g, root = find_group(path, "contacts")
+    write_figure(lambda axes: draw_contacts(
+        g, root, axes, doppler_mps=doppler_mps, threshold_kn=threshold_kn,
+        snr_min_db=snr_min_db, truth=truth, name=Path(path).name), out_png, LAYOUT)
 
+
+def draw_contacts(g: dict, root: dict, axes: Any = None, doppler_mps: float = 5.0,
+                  threshold_kn: float = 2.0, snr_min_db: float = 15.0, truth: bool = True,
+                  name: str = "") -> Any:
+    """Draw active contacts (module doc) on two axes: range against cone angle, and the ECDF
+    of |absolute Doppler|.
+
+    ``g`` is a ``contacts`` products group and ``root`` the file's root attributes (its
+    ``source`` recording's ``/truth/echoes`` are marked when ``truth``); ``axes`` a pair of
+    matplotlib Axes (default: a new figure); ``name`` the file name in the title.
     ``doppler_mps`` sets the colour scale (+-, m/s); ``threshold_kn`` the ECDF's marker; only
     contacts of at least ``snr_min_db`` are drawn (the thesis's fig. 4.10 takes the contacts
     "exceeding a preset SNR threshold"; the CFAR's own false alarms sit just above its
-    threshold, 12-13 dB at pfa 1e-6).
+    threshold, 12-13 dB at pfa 1e-6). Returns the matplotlib Figure.
     """
-    import matplotlib.pyplot as plt
-
-    g, root = find_group(path, "contacts")
     c = {k: np.asarray(v) for k, v in g.items() if k not in ("attrs", "kind", "stage")}
     n_all = c["range_m"].size
     keep = c["snr_db"] >= snr_min_db
@@ -47,8 +63,7 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
         from arrayproc.plots._active import echo_truth
         with Recording(src) as rec:
             tr = echo_truth(rec)
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.0, 5.5), dpi=110,
-                                 gridspec_kw={"width_ratios": [1.35, 1.0]})
+    fig, (ax, bx), new = subplots(axes, LAYOUT)
     ins = (wv == "hfm") | (wv == "lfm")  # Doppler insensitive: no measured Doppler
     if ins.any():
         ax.scatter(c["cone_deg"][ins], c["range_m"][ins], s=10, marker="x", color="0.45",
@@ -74,7 +89,7 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
     ax.set_xlim(0, 180)
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"contacts with SNR >= {snr_min_db:g} dB: {c['range_m'].size} of {n_all}, "
-                 f"{np.unique(c['ping']).size} pings\n{Path(path).name}", fontsize=10)
+                 f"{np.unique(c['ping']).size} pings\n{name}", fontsize=10)
     sens = clutter & (wv != "hfm") & (wv != "lfm")
     a = np.sort(np.abs(c["absolute_doppler_mps"][sens]) / KNOT)
     if a.size:
@@ -91,6 +106,4 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
     bx.set_ylabel("empirical CDF")
     who = "clutter (truth-associated)" if tr is not None else "all"
     bx.set_title(f"ECDF of |absolute Doppler|, {who} contacts", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    return finish(fig, new, LAYOUT)

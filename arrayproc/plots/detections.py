@@ -4,12 +4,16 @@ time-frequency boxes of the ``detections`` product."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.io.units import level_label, reference_amplitude
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._delay import groups_of, source_recording
+
+#: Figure size and resolution of the detections plot.
+LAYOUT = {"figsize": (8.0, 8.0), "dpi": 110}
 
 
 @register_plot("detections")
@@ -36,20 +40,53 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
     beam, truth
         Options of the other plots, unused here.
     """
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Rectangle
-    from scipy.signal import spectrogram
-
     found, root = groups_of(path, "detections")
     name, g = found[0]
-    t0, t1 = g.get("time_start", np.zeros(0)), g.get("time_end", np.zeros(0))
-    lo, hi = g.get("freq_lo", np.zeros(0)), g.get("freq_hi", np.zeros(0))
     ch = int(channel if channel is not None else (g["channel"][0] if "channel" in g
                                                    and len(g["channel"]) else 0))
     with source_recording(root, path, "detections") as rec:
         x = rec.read()[:, ch].astype(float)
         fs = rec.fs
         units = rec.units
+    write_figure(lambda ax: draw_detections(
+        g, x, fs, units, ax, channel=ch, nfft=nfft, range_db=range_db, fmax=fmax,
+        title=f"channel {ch} spectrogram with {{n}} detections ({name})\n{Path(path).name}"),
+        out_png, LAYOUT)
+
+
+def draw_detections(g: dict, x: np.ndarray, fs: float, units: str, ax: Any = None,
+                    channel: int = 0, nfft: int = 1024, range_db: float = 50.0,
+                    fmax: float | None = None, title: str = "") -> Any:
+    """Draw the spectrogram of one channel's samples with the boxes of a ``detections``
+    products group: frequency across, time running down.
+
+    Parameters
+    ----------
+    g : dict
+        A ``detections`` group (``time_start``, ``time_end``, ``freq_lo``, ``freq_hi``).
+    x : (n,) array
+        The channel's samples, in ``units``.
+    fs : float
+        Sample rate, Hz.
+    units : str
+        Sample unit (``"Pa"``, ``"FS"``; :mod:`arrayproc.io.units`).
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure).
+    channel, nfft, range_db, fmax
+        As in :func:`plot_detections`.
+    title : str
+        Title; ``{n}`` is replaced by the number of detections (default: the channel's).
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    from matplotlib.patches import Rectangle
+    from scipy.signal import spectrogram
+
+    t0, t1 = g.get("time_start", np.zeros(0)), g.get("time_end", np.zeros(0))
+    lo, hi = g.get("freq_lo", np.zeros(0)), g.get("freq_hi", np.zeros(0))
+    ch = channel
     f, t, S = spectrogram(x, fs, window="hann", nperseg=nfft, noverlap=nfft // 2,
                           scaling="density")
     ref2 = reference_amplitude(units) ** 2
@@ -58,7 +95,7 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
     if fmax is None:
         fmax = min(fs / 2, 2 * float(hi.max())) if hi.size else fs / 2
     keep = f <= fmax
-    fig, ax = plt.subplots(figsize=(8.0, 8.0), dpi=110)
+    fig, ax, new = subplots(ax, LAYOUT)
     im = ax.imshow(L[:, keep], aspect="auto", cmap="viridis", vmin=top - range_db, vmax=top,
                    extent=[f[0], f[keep][-1], t[-1] + nfft / fs / 2, t[0] - nfft / fs / 2],
                    interpolation="nearest")
@@ -68,8 +105,6 @@ def plot_detections(path: str, out_png: str, channel: int | None = None, nfft: i
         ax.add_patch(Rectangle((fl, a), fh - fl, b - a, fill=False, ec="red", lw=1.2))
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("time (s since recording start)")
-    ax.set_title(f"channel {ch} spectrogram with {len(t0)} detections ({name})\n"
-                 f"{Path(path).name}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    ax.set_title((title or f"channel {ch} spectrogram with {{n}} detections").replace(
+        "{n}", str(len(t0))), fontsize=10)
+    return finish(fig, new, LAYOUT)

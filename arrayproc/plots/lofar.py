@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.io.units import file_units, level_label
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._passive import find_group, open_truth_recording, robust_top
 
 #: Truth tonals are drawn while their source lies within this many degrees of the beam.
@@ -16,23 +17,49 @@ TRUTH_GATE_DEG = 10.0
 OVERLAY_COLOURS = ("tab:red", "white", "tab:orange", "magenta")
 #: Bottom of the colour scale for TPSW-normalised LOFAR-grams (noise sits at 0 dB).
 TPSW_FLOOR_DB = -3.0
+#: Figure size and resolution of the LOFAR plot.
+LAYOUT = {"figsize": (9.0, 7.5), "dpi": 110}
 
 
 @register_plot("lofar")
 def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | None = None,
                truth: bool = True) -> None:
     """Draw the LOFAR-gram of the beam nearest cone angle ``beam`` (deg) from the first
-    ``lofar`` group of ``path`` into ``out_png``.
-
-    Default beam: the one with the highest mean level. The colour scale spans ``range_db`` dB:
-    from TPSW_FLOOR_DB up for TPSW-normalised products (background = 0 dB), otherwise down
-    from the 99.9th percentile of that beam's record. With truth (see the BTR plot), each
-    source's Doppler-shifted tonals are drawn as dashed lines while the source is within
-    ±TRUTH_GATE_DEG of the beam.
-    """
-    import matplotlib.pyplot as plt
-
+    ``lofar`` group of ``path`` into ``out_png`` (:func:`draw_lofar`)."""
     g, root = find_group(path, "lofar")
+    write_figure(lambda ax: draw_lofar(g, root, ax, range_db=range_db, beam=beam, truth=truth,
+                                       name=Path(path).name), out_png, LAYOUT)
+
+
+def draw_lofar(g: dict, root: dict, ax: Any = None, range_db: float = 20.0,
+               beam: float | None = None, truth: bool = True, name: str = "") -> Any:
+    """Draw the LOFAR-gram of one beam: frequency across, time running down.
+
+    Parameters
+    ----------
+    g : dict
+        A ``lofar`` products group (``time``, ``freq``, ``cone_deg``, ``power_db`` (n, beams,
+        bins), ``attrs``), as :func:`arrayproc.io.products.read_products` gives.
+    root : dict
+        The products file's root attributes (``units``; ``source``, for the truth).
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure).
+    range_db : float
+        Colour span, dB: from TPSW_FLOOR_DB up for TPSW-normalised products (background =
+        0 dB), otherwise down from the 99.9th percentile of that beam's record.
+    beam : float, optional
+        Cone angle (deg) of the beam shown (the nearest); default the beam with the highest
+        mean level.
+    truth : bool
+        Each source's Doppler-shifted tonals as dashed lines while the source is within
+        ±TRUTH_GATE_DEG of the beam, when the recording holds ``/truth``.
+    name : str
+        The file name shown under the title.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
     t, f, cone, p = g["time"], g["freq"], g["cone_deg"], g["power_db"]
     if beam is None:
         b = int(np.argmax(np.nanmean(p, axis=(0, 2)))) if p.size else 0
@@ -44,7 +71,7 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
         top = TPSW_FLOOR_DB + range_db
     else:
         top = robust_top(pb)
-    fig, ax = plt.subplots(figsize=(9.0, 7.5), dpi=110)
+    fig, ax, new = subplots(ax, LAYOUT)
     dt = np.median(np.diff(t)) if t.size > 1 else 1.0
     df = np.median(np.diff(f)) if f.size > 1 else 1.0
     im = ax.imshow(pb, aspect="auto", cmap="viridis",
@@ -77,7 +104,5 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
     ax.set_ylim(t[-1] + dt / 2, t[0] - dt / 2)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("time (s since recording start)")
-    ax.set_title(f"LOFAR, beam {cone[b]:.1f} deg cone angle\n{Path(path).name}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    ax.set_title(f"LOFAR, beam {cone[b]:.1f} deg cone angle\n{name}", fontsize=10)
+    return finish(fig, new, LAYOUT)

@@ -7,10 +7,12 @@ from __future__ import annotations
 import os
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
 
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
+
+#: Figure size and panels of the metrics plot.
+LAYOUT = {"figsize": (8, 7), "nrows": 2, "ncols": 1, "gridspec_kw": {"height_ratios": [3, 2]}}
 
 
 @register_plot("metrics")
@@ -18,12 +20,22 @@ def plot_metrics(tracks_path: str, out_png: str, c: float = 1000.0, p: float = 2
                  **_: Any) -> None:
     """GOSPA (c = ``c`` m, order ``p``, α = 2) with its localisation / missed / false parts
     and OSPA against time (min), and per source the held fraction, breaks and final position
-    error."""
+    error (:func:`draw_metrics`)."""
     from arrayproc.evaluate.metrics import evaluate_tracks_file
 
     r = evaluate_tracks_file(tracks_path, c=c, p=p)
+    write_figure(lambda axes: draw_metrics(r, axes, c=c, p=p,
+                                           name=os.path.basename(tracks_path)),
+                 out_png, LAYOUT, dpi=120)
+
+
+def draw_metrics(r: dict, axes: Any = None, c: float = 1000.0, p: float = 2.0,
+                 name: str = "") -> Any:
+    """Draw the metrics of :func:`arrayproc.evaluate.metrics.evaluate_tracks_file` (``r``,
+    computed with ``c`` and ``p``) on two axes (default: a new figure); ``name`` the tracks
+    file in the title. Returns the matplotlib Figure."""
     t = r["times"] / 60.0
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), gridspec_kw={"height_ratios": [3, 2]})
+    fig, (a1, a2), new = subplots(axes, LAYOUT)
     a1.plot(t, r["gospa"], "k-", lw=1.8, label=f"GOSPA (c = {c:g} m, p = {p:g}, α = 2)")
     a1.plot(t, r["ospa"], "--", color="tab:gray", lw=1.2, label="OSPA")
     for key, col, lab in (("gospa_localisation", "tab:blue", "localisation"),
@@ -51,7 +63,5 @@ def plot_metrics(tracks_path: str, out_png: str, c: float = 1000.0, p: float = 2
     a2.set_ylim(0, 105)
     a2.set_title(f"{r['n_confirmed']} confirmed tracks, {len(r['false_tracks'])} false",
                  fontsize=9)
-    a1.set_title(f"{os.path.basename(tracks_path)}: multi-target metrics against truth")
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    a1.set_title(f"{name}: multi-target metrics against truth")
+    return finish(fig, new, LAYOUT)

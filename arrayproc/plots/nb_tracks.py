@@ -2,8 +2,8 @@
 against time (time running down) for the Kalman tracker and the CBF baseline with the truth,
 and the ECDF and EPDF of the cone error.
 
-:func:`draw` takes arrays (used by ``scripts/reproduce_nb_ekf.py``); the registered plotter
-reads the ``nb_tracks`` groups of a products file (an ``nb_ekf`` stage's group and, with
+:func:`draw_nb_tracks` takes arrays (used by ``scripts/reproduce_nb_ekf.py``); the registered
+plotter reads the ``nb_tracks`` groups of a products file (an ``nb_ekf`` stage's group and, with
 ``baseline = true``, its ``<name>_cbf`` group) and the truth of the recording named by the
 products, when it has one.
 """
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from arrayproc.errors import ArrayprocError
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 
 #: EPDF range, deg (the thesis truncates the error at 2.5°).
 EPDF_LIMIT_DEG = 2.5
@@ -28,15 +28,20 @@ ZORDER = {"KAL": 3, "KAL single": 2, "CBF": 1}
 FREQ_MARGIN_HZ = 2.5
 #: Most points drawn per time series.
 MAX_POINTS = 20000
+#: Figure size, resolution and panels of the narrowband plot.
+LAYOUT = {"figsize": (14.0, 9.0), "dpi": 100, "nrows": 2, "ncols": 3}
 
 
 def _thin(n: int) -> slice:
     return slice(None, None, max(1, n // MAX_POINTS))
 
 
-def draw(estimators: dict[str, dict[str, np.ndarray]], truth: dict[str, np.ndarray] | None,
-         out_png: str | Path, title: str = "", settle_s: float = 10.0) -> None:
-    """Draw the narrowband figure.
+def draw_nb_tracks(estimators: dict[str, dict[str, np.ndarray]],
+                   truth: dict[str, np.ndarray] | None,
+         out_png: str | Path | None = None, title: str = "", settle_s: float = 10.0,
+         axes: Any = None) -> Any:
+    """Draw the narrowband figure into ``out_png``, or on ``axes`` (a 2 x 3 array of
+    matplotlib Axes; default: a new figure), returning the Figure.
 
     Parameters
     ----------
@@ -45,16 +50,24 @@ def draw(estimators: dict[str, dict[str, np.ndarray]], truth: dict[str, np.ndarr
     truth : dict or None
         ``{"time": s, "cone_deg": deg, "freq_hz": received Hz}`` (interpolated to each
         estimator's times for the error panels).
-    out_png : path
-        Output PNG.
+    out_png : path, optional
+        Output image.
     title : str
         Figure title.
     settle_s : float
         Start-up excluded from the ECDF/EPDF, s.
-    """
-    import matplotlib.pyplot as plt
+    axes : 2 x 3 array of matplotlib Axes, optional
+        Where to draw when there is no ``out_png``.
 
-    fig, axs = plt.subplots(2, 3, figsize=(14.0, 9.0), dpi=100)
+    Returns
+    -------
+    matplotlib Figure, or None when written to ``out_png``
+    """
+    if out_png is not None and axes is None:
+        write_figure(lambda a: draw_nb_tracks(estimators, truth, None, title, settle_s, a),
+                     str(out_png), LAYOUT)
+        return None
+    fig, axs, new = subplots(axes, LAYOUT)
     a_cone, a_err, a_freq = axs[0]
     a_ecdf, a_epdf, a_ferr = axs[1]
     t_all = np.concatenate([e["time"] for e in estimators.values()])
@@ -122,9 +135,7 @@ def draw(estimators: dict[str, dict[str, np.ndarray]], truth: dict[str, np.ndarr
     a_ferr.set_title("frequency error")
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    return finish(fig, new, LAYOUT)
 
 
 def _truth_from_recording(root: dict, t: np.ndarray, cone: np.ndarray, freq: np.ndarray):
@@ -180,4 +191,7 @@ def plot_nb_tracks(path: str, out_png: str, truth: bool = True, **_other: Any) -
         est[("CBF" if is_cbf else "KAL") + ("" if len(tracks) <= 2 else f" {name}")] = {
             "time": np.asarray(g["time"], float), "cone_deg": np.asarray(g["cone_deg"], float),
             "freq_hz": f}
-    draw(est, tr, out_png, title=Path(path).name)
+    draw_nb_tracks(est, tr, out_png, title=Path(path).name)
+
+
+draw = draw_nb_tracks  # the name scripts/reproduce_nb_ekf.py uses

@@ -4,12 +4,16 @@ views around the array, with 1σ error ellipses from the ``cov`` column."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.errors import ArrayprocError
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._delay import ellipse, groups_of
+
+#: Figure size, resolution, panels and layout engine of the positions plot.
+LAYOUT = {"figsize": (12.0, 6.2), "dpi": 110, "layout": "constrained", "nrows": 1, "ncols": 2}
 
 
 def _elements(root: dict) -> np.ndarray | None:
@@ -45,22 +49,36 @@ def plot_positions(path: str, out_png: str, span: float | None = None,
     range_db, beam, truth
         Options of the other plots, unused here.
     """
-    import matplotlib.pyplot as plt
-
     found, root = groups_of(path, "positions")
     name, g = found[0]
     if "x" not in g:
         raise ArrayprocError(f"{path}: positions product is empty (no rows)")
+    el = _elements(root)
+    write_figure(lambda axes: draw_positions(g, el, axes, span=span, n_sigma=n_sigma,
+                                             name=f"{name}", file=Path(path).name),
+                 out_png, LAYOUT)
+
+
+def draw_positions(g: dict, elements: np.ndarray | None = None, axes: Any = None,
+                   span: float | None = None, n_sigma: float = 1.0, name: str = "positions",
+                   file: str = "") -> Any:
+    """Draw a ``positions`` products group in plan and side views on two axes (default: a
+    new figure), with ``n_sigma`` error ellipses, coloured by time; ``elements`` (n, 3) m,
+    the hydrophones, when known. ``span`` as in :func:`plot_positions`; ``name`` the group
+    and ``file`` the file named in the title. Returns the matplotlib Figure.
+    """
+    from matplotlib import colormaps
+
+    el = elements
     p = np.stack([g["x"], g["y"], g["z"]], axis=1)
     cov, t = g["cov"], g["time"]
-    el = _elements(root)
     centre = el.mean(axis=0) if el is not None else np.median(p, axis=0)
     far = np.max(np.abs(p - centre), axis=1) if p.size else np.zeros(0)
     if span is None:
         span = max(2.0, 1.3 * float(np.percentile(far, 90))) if p.size else 5.0
     n_out = int(np.sum(far > span))
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.0, 6.2), dpi=110, layout="constrained")
-    cmap = plt.get_cmap("plasma")
+    fig, (a1, a2), new = subplots(axes, LAYOUT)
+    cmap = colormaps["plasma"]
     tn = (t - t.min()) / max(np.ptp(t), 1e-9)
     for ax, (i, j), lab in ((a1, (0, 1), "y north (m)"), (a2, (0, 2), "z depth (m, down)")):
         for k in range(p.shape[0]):
@@ -84,6 +102,5 @@ def plot_positions(path: str, out_png: str, span: float | None = None,
     cb.set_label("event time (s since recording start)")
     out_txt = f", {n_out} outside the view" if n_out else ""
     fig.suptitle(f"{p.shape[0]} localised events with {n_sigma:g}σ ellipses ({name}"
-                 f"{out_txt})\n{Path(path).name}", fontsize=10)
-    fig.savefig(out_png)
-    plt.close(fig)
+                 f"{out_txt})\n{file}", fontsize=10)
+    return finish(fig, new, LAYOUT)

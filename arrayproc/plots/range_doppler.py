@@ -7,29 +7,37 @@ contacts')."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.errors import ArrayprocError
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots._passive import find_group
+
+#: Figure size and resolution of the range-Doppler plot.
+LAYOUT = {"figsize": (8.0, 5.0), "dpi": 110}
 
 
 @register_plot("range_doppler")
 def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: int | None = None,
                        cone: float | None = None, truth: bool = True,
                        beam: float | None = None) -> None:
-    """Draw one row of the first ``range_doppler`` group of ``path`` into ``out_png``.
-
-    ``ping`` and ``cone`` (deg; ``beam``, the ``plot`` command's ``--beam``, is the same) pick
-    the row (default: the first row); the colour scale spans ``range_db`` dB below the map's
-    peak.
-    """
+    """Draw one row of the first ``range_doppler`` group of ``path`` into ``out_png``
+    (:func:`draw_range_doppler`; ``beam``, the ``plot`` command's ``--beam``, is ``cone``)."""
     if cone is None:
         cone = beam
-    import matplotlib.pyplot as plt
-
     g, root = find_group(path, "range_doppler")
+    row = range_doppler_row(g, ping, cone, path)
+    write_figure(lambda ax: draw_range_doppler(g, root, row, ax, range_db=range_db,
+                                               truth=truth, name=Path(path).name),
+                 out_png, LAYOUT)
+
+
+def range_doppler_row(g: dict, ping: int | None = None, cone: float | None = None,
+                      path: str = "") -> int:
+    """The row of a ``range_doppler`` group for ``ping`` and the beam nearest ``cone`` (deg)
+    (default: the first row); ArrayprocError naming ``path`` when no row matches."""
     pings = np.asarray(g["ping"]).reshape(-1)
     cones = np.asarray(g["cone_deg"], float).reshape(-1)
     rows = np.arange(pings.size)
@@ -39,12 +47,25 @@ def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: in
         rows = rows[np.argsort(np.abs(cones[rows] - cone), kind="stable")]
     if rows.size == 0:
         raise ArrayprocError(f"{path}: no range_doppler row for ping {ping}")
-    i = int(rows[0])
+    return int(rows[0])
+
+
+def draw_range_doppler(g: dict, root: dict, i: int = 0, ax: Any = None, range_db: float = 30.0,
+                       truth: bool = True, name: str = "") -> Any:
+    """Draw row ``i`` of a ``range_doppler`` products group: range across, range rate up,
+    |χ|² in dB re its peak over ``range_db`` dB; the true echoes of the ping within 3 deg of
+    the beam when ``truth`` and the ``source`` recording of ``root`` has ``/truth/echoes``.
+
+    ``ax`` is a matplotlib Axes (default: a new figure); ``name`` the file name in the title.
+    Returns the matplotlib Figure.
+    """
+    pings = np.asarray(g["ping"]).reshape(-1)
+    cones = np.asarray(g["cone_deg"], float).reshape(-1)
     rng = np.asarray(g["range_m"][i], float)
     rr = np.asarray(g["range_rate_mps"][i], float)
     lev = np.asarray(g["level_db"][i], float)
     lev = lev - np.nanmax(lev)
-    fig, ax = plt.subplots(figsize=(8.0, 5.0), dpi=110)
+    fig, ax, new = subplots(ax, LAYOUT)
     drr = rr[1] - rr[0] if rr.size > 1 else 1.0
     im = ax.imshow(lev, aspect="auto", origin="lower", cmap="viridis", vmin=-range_db, vmax=0,
                    extent=[rng[0], rng[-1], rr[0] - drr / 2, rr[-1] + drr / 2],
@@ -69,7 +90,5 @@ def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: in
     ax.set_xlabel("range from the array (m)")
     ax.set_ylabel("range rate (m/s, positive opening)")
     ax.set_title(f"range-Doppler, ping {int(pings[i])}, cone {cones[i]:.1f} deg\n"
-                 f"{Path(path).name}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+                 f"{name}", fontsize=10)
+    return finish(fig, new, LAYOUT)

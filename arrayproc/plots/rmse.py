@@ -3,22 +3,34 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
+
+from arrayproc.plots import finish, subplots, write_figure
 
 __all__ = ["plot_rmse_curves", "plot_scenario_geometry"]
 
+#: Figure sizes and layout engine of the two plots.
+CURVES_LAYOUT = {"figsize": (7.5, 4.5), "constrained_layout": True}
+GEOMETRY_LAYOUT = {"figsize": (5.5, 5.0), "constrained_layout": True}
 
-def plot_rmse_curves(time_min: np.ndarray, curves: Mapping[str, np.ndarray], out_png: str,
-                     crlb: np.ndarray | None = None, title: str = "",
-                     paper_points: Mapping[str, tuple] | None = None,
-                     logy: bool = True) -> None:
-    """Position RMSE (m) against time (min), one line per curve, the CRLB dashed.
+
+def plot_rmse_curves(time_min: np.ndarray, curves: Mapping[str, np.ndarray],
+                     out_png: str | None = None, crlb: np.ndarray | None = None,
+                     title: str = "", paper_points: Mapping[str, tuple] | None = None,
+                     logy: bool = True, ax: Any = None) -> Any:
+    """Position RMSE (m) against time (min), one line per curve, the CRLB dashed: into
+    ``out_png`` (dpi 120), or on ``ax`` (default: a new figure), returning the Figure.
 
     ``paper_points``: label → (times_min, values_m) drawn as markers (published numbers).
     """
-    fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
+    if out_png is not None and ax is None:
+        write_figure(lambda a: plot_rmse_curves(time_min, curves, None, crlb, title,
+                                                paper_points, logy, a),
+                     out_png, CURVES_LAYOUT, dpi=120)
+        return None
+    fig, ax, new = subplots(ax, CURVES_LAYOUT)
     colours = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
     for (label, y), c in zip(curves.items(), colours, strict=False):
         ax.plot(time_min, y, color=c, lw=1.6, label=label)
@@ -35,14 +47,18 @@ def plot_rmse_curves(time_min: np.ndarray, curves: Mapping[str, np.ndarray], out
     ax.legend(fontsize=8)
     if title:
         ax.set_title(title)
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    return finish(fig, new, CURVES_LAYOUT)
 
 
-def plot_scenario_geometry(target_xy: np.ndarray, observer_xy: np.ndarray, out_png: str,
-                           title: str = "") -> None:
-    """Target and observer tracks (km), x east, y north, start points marked."""
-    fig, ax = plt.subplots(figsize=(5.5, 5.0), constrained_layout=True)
+def plot_scenario_geometry(target_xy: np.ndarray, observer_xy: np.ndarray,
+                           out_png: str | None = None, title: str = "", ax: Any = None) -> Any:
+    """Target and observer tracks (km), x east, y north, start points marked: into
+    ``out_png`` (dpi 120), or on ``ax`` (default: a new figure), returning the Figure."""
+    if out_png is not None and ax is None:
+        write_figure(lambda a: plot_scenario_geometry(target_xy, observer_xy, None, title, a),
+                     out_png, GEOMETRY_LAYOUT, dpi=120)
+        return None
+    fig, ax, new = subplots(ax, GEOMETRY_LAYOUT)
     ax.plot(target_xy[:, 0] / 1e3, target_xy[:, 1] / 1e3, "r-", label="target")
     ax.plot(observer_xy[:, 0] / 1e3, observer_xy[:, 1] / 1e3, "b-", label="observer")
     ax.plot(target_xy[0, 0] / 1e3, target_xy[0, 1] / 1e3, "rs", label="target start")
@@ -54,5 +70,4 @@ def plot_scenario_geometry(target_xy: np.ndarray, observer_xy: np.ndarray, out_p
     ax.legend(fontsize=8)
     if title:
         ax.set_title(title)
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    return finish(fig, new, GEOMETRY_LAYOUT)

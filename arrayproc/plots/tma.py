@@ -14,13 +14,15 @@ import os
 from typing import Any
 
 import h5py
-import matplotlib.pyplot as plt
 import numpy as np
 
 from arrayproc.errors import FormatError
 from arrayproc.io.text import as_text
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots.ellipse import cov_ellipse
+
+#: Figure size and panels of the TMA plot.
+LAYOUT = {"figsize": (12, 6), "nrows": 1, "ncols": 2}
 
 
 def _truth(path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -51,24 +53,35 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
         Overlay the recording's truth when it has one.
     """
     from arrayproc.io.products import read_products
-    from arrayproc.io.recording import Recording
-    from arrayproc.track.batch.bo_tma import bearing_model
-    from arrayproc.track.batch.compact import compact_bearings
-    from arrayproc.track.batch.run import read_measurements
-    from arrayproc.track.batch.td_tma import delay_model
 
     prod = read_products(path)
     names = list(prod.groups("tma"))
     if not names:
         raise FormatError(f"{path}: no tma group")
     g = prod[names[0]]
+    write_figure(lambda axes: draw_tma(g, prod.root, axes, truth=truth), out_png, LAYOUT,
+                 dpi=110)
+
+
+def draw_tma(g: dict, root: dict, axes: Any = None, truth: bool = True) -> Any:
+    """Draw a ``tma`` products group on two axes (default: a new figure): the plan view and
+    the measurements against the fitted model (module doc). The recording (navigation,
+    truth) and the measurements are those the group's attributes name (``recording``, else
+    ``root``'s ``source``; ``products``). Returns the matplotlib Figure.
+    """
+    from arrayproc.io.recording import Recording
+    from arrayproc.track.batch.bo_tma import bearing_model
+    from arrayproc.track.batch.compact import compact_bearings
+    from arrayproc.track.batch.run import read_measurements
+    from arrayproc.track.batch.td_tma import delay_model
+
     a = g["attrs"]
     method = as_text(a.get("method", ""))
-    rec_path = as_text(a.get("recording", prod["/"].get("source", "")))
+    rec_path = as_text(a.get("recording", root.get("source", "")))
     src_path = as_text(a.get("products", ""))
     sides = as_text(a.get("side", "")).split(",")
     n = g["x"].shape[0]
-    fig, (ax, axm) = plt.subplots(1, 2, figsize=(12, 6))
+    fig, (ax, axm), new = subplots(axes, LAYOUT)
     t_all = np.concatenate([np.linspace(g["t0"][i], g["t1"][i], 50) for i in range(n)])
     rec = Recording(rec_path) if rec_path and os.path.exists(rec_path) else None
     try:
@@ -150,6 +163,4 @@ def plot_tma(path: str, out_png: str, truth: bool = True, **_: Any) -> None:
     finally:
         if rec is not None:
             rec.close()
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=110)
-    plt.close(fig)
+    return finish(fig, new, LAYOUT)

@@ -10,16 +10,20 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import h5py
-import matplotlib.pyplot as plt
 import numpy as np
 
 from arrayproc.errors import FormatError
 from arrayproc.io.text import as_text
-from arrayproc.plots import register_plot
+from arrayproc.plots import finish, register_plot, subplots, write_figure
 from arrayproc.plots.ellipse import cov_ellipse
 
 FILTER_STYLE = {"ekf": "tab:red", "ukf": "tab:blue", "ckf": "tab:green", "ghf": "tab:orange",
                 "srf": "tab:purple", "rpf": "tab:brown"}
+#: Figure sizes of the track plan view, the RMSE pair, the bias and the L-R example.
+LAYOUT = {"figsize": (8, 7)}
+RMSE_LAYOUT = {"figsize": (11, 4.2), "nrows": 1, "ncols": 2}
+BIAS_LAYOUT = {"figsize": (6, 4)}
+LR_LAYOUT = {"figsize": (12, 5), "nrows": 1, "ncols": 2, "gridspec_kw": {"width_ratios": [3, 2]}}
 
 
 def _read_truth(recording: str) -> dict[str, np.ndarray]:
@@ -48,7 +52,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     every ``ellipse_every`` rows (default: about six per track); the truth of each source in
     its own dashed colour, named at its end (``truth`` {name: (n, 2) m}, or the recording's
     ``/truth/sources`` when the tracks file names it; False: none), over the tracks' time
-    span."""
+    span (:func:`draw_track`)."""
     from arrayproc.io.products import read_products
 
     prod = read_products(tracks_path)
@@ -56,7 +60,21 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     if not groups:
         raise FormatError(f"{tracks_path}: no tracks group")
     g = groups[0]
-    root = prod["/"]
+    write_figure(lambda ax: draw_track(g, prod.root, ax, ellipse_every, truth,
+                                       title or f"{os.path.basename(tracks_path)} (2σ ellipses)"),
+                 out_png, LAYOUT, dpi=120)
+
+
+def draw_track(g: dict, root: dict, ax: Any = None, ellipse_every: int | None = None,
+               truth: Mapping[str, np.ndarray] | bool | None = None, title: str = "") -> Any:
+    """Draw a ``tracks`` products group in plan view (see :func:`plot_track`): ownship, each
+    track with its id and 2σ ellipses, the truth (``truth`` {name: (n, 2) m}; None or True:
+    the ``recording`` of ``root``'s ``/truth/sources``; False: none).
+
+    ``ax`` is a matplotlib Axes (default: a new figure). Returns the matplotlib Figure.
+    """
+    from matplotlib import colormaps
+
     t_all = np.asarray(g["time"], float) if "time" in g else np.zeros(0)
     tspan = (float(t_all.min()), float(t_all.max())) if t_all.size else None
     truth_times: dict[str, np.ndarray] = {}
@@ -66,12 +84,12 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
                                                else str(rec))
     elif truth is False:
         truth = {}
-    fig, ax = plt.subplots(figsize=(8, 7))
+    fig, ax, new = subplots(ax, LAYOUT)
     if "own_x" in g and t_all.size:
         o = np.argsort(t_all, kind="stable")
         ax.plot(g["own_x"][o] / 1e3, g["own_y"][o] / 1e3, "k-", lw=2, label="ownship")
         ax.plot(g["own_x"][o][0] / 1e3, g["own_y"][o][0] / 1e3, "ko", ms=5)
-    tcol = plt.get_cmap("Dark2")
+    tcol = colormaps["Dark2"]
     for k, (name, p) in enumerate(sorted(truth.items())):
         if name in truth_times and tspan is not None:
             tt = truth_times[name]
@@ -86,7 +104,7 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     from arrayproc.track.manage.tracks import status_names
     status = status_names(g["status"]) if "status" in g else None
     ids = np.unique(g["track_id"])
-    cmap = plt.get_cmap("tab10")
+    cmap = colormaps["tab10"]
     for k, tid in enumerate(ids):
         m = np.flatnonzero(g["track_id"] == tid)
         m = m[np.argsort(t_all[m], kind="stable")]
@@ -114,10 +132,8 @@ def plot_track(tracks_path: str, out_png: str, ellipse_every: int | None = None,
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8, ncol=2)
-    ax.set_title(title or f"{os.path.basename(tracks_path)} (2σ ellipses)")
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    ax.set_title(title)
+    return finish(fig, new, LAYOUT)
 
 
 def _read_truth_timed(recording: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -139,12 +155,25 @@ def _read_truth_timed(recording: str) -> tuple[dict[str, np.ndarray], dict[str, 
     return pos, times
 
 
+def _to_file(draw: Any, out_png: str | None, layout: Mapping[str, Any]) -> Any:
+    """``draw(axes)`` into ``out_png`` (dpi 120) when given, else on a new figure, returned."""
+    if out_png is None:
+        return draw(None)
+    write_figure(draw, out_png, layout, dpi=120)
+    return None
+
+
 def plot_rmse(times_s: np.ndarray, curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
-              out_png: str, bound_pos_m: np.ndarray | None = None, title: str = "") -> None:
+              out_png: str | None = None, bound_pos_m: np.ndarray | None = None,
+              title: str = "", axes: Any = None) -> Any:
     """Position and velocity RMSE against time for several filters ({name: (pos m, vel m/s)}),
-    with the position CRLB when given (L-R paper figs. 5 and 7)."""
+    with the position CRLB when given (L-R paper figs. 5 and 7): into ``out_png``, or on
+    ``axes`` (two matplotlib Axes; default a new figure), returning the Figure."""
+    if out_png is not None and axes is None:
+        return _to_file(lambda a: plot_rmse(times_s, curves, None, bound_pos_m, title, a),
+                        out_png, RMSE_LAYOUT)
     t = np.asarray(times_s) / 60.0
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (a1, a2), new = subplots(axes, RMSE_LAYOUT)
     for name, (pos, vel) in curves.items():
         c = FILTER_STYLE.get(name.split()[0].lower())
         a1.plot(t, pos / 1e3, color=c, label=name.upper())
@@ -161,16 +190,18 @@ def plot_rmse(times_s: np.ndarray, curves: Mapping[str, tuple[np.ndarray, np.nda
         a.grid(alpha=0.3, which="both")
         a.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    return finish(fig, new, RMSE_LAYOUT)
 
 
-def plot_bias(times_s: np.ndarray, curves: Mapping[str, np.ndarray], out_png: str,
-              title: str = "") -> None:
-    """Bias norm ‖mean position error‖ (m) against time (L-R paper fig. 6)."""
+def plot_bias(times_s: np.ndarray, curves: Mapping[str, np.ndarray], out_png: str | None = None,
+              title: str = "", ax: Any = None) -> Any:
+    """Bias norm ‖mean position error‖ (m) against time (L-R paper fig. 6): into ``out_png``,
+    or on ``ax`` (default a new figure), returning the Figure."""
+    if out_png is not None and ax is None:
+        return _to_file(lambda a: plot_bias(times_s, curves, None, title, a), out_png,
+                        BIAS_LAYOUT)
     t = np.asarray(times_s) / 60.0
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax, new = subplots(ax, BIAS_LAYOUT)
     for name, b in curves.items():
         ax.plot(t, np.asarray(b) / 1e3, color=FILTER_STYLE.get(name.lower()),
                 label=name.upper())
@@ -179,19 +210,22 @@ def plot_bias(times_s: np.ndarray, curves: Mapping[str, np.ndarray], out_png: st
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(title)
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    return finish(fig, new, BIAS_LAYOUT)
 
 
 def plot_lr_example(own: np.ndarray, truth: np.ndarray, known: np.ndarray,
                     resolved: np.ndarray, ghost: np.ndarray, weights: np.ndarray,
-                    times_s: np.ndarray, out_png: str, labels: Sequence[str] = (),
-                    title: str = "") -> None:
+                    times_s: np.ndarray, out_png: str | None = None,
+                    labels: Sequence[str] = (), title: str = "", axes: Any = None) -> Any:
     """One run (L-R paper fig. 4): ownship, truth, known-side estimate, L-R resolved estimate
     and the ghost hypothesis (absolute positions, m) while its weight 1 − ω¹ is at least 1 %,
-    and the true-side weight ω¹ over time."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [3, 2]})
+    and the true-side weight ω¹ over time: into ``out_png``, or on ``axes`` (two matplotlib
+    Axes; default a new figure), returning the Figure."""
+    if out_png is not None and axes is None:
+        return _to_file(lambda a: plot_lr_example(own, truth, known, resolved, ghost, weights,
+                                                  times_s, None, labels, title, a),
+                        out_png, LR_LAYOUT)
+    fig, (a1, a2), new = subplots(axes, LR_LAYOUT)
     a1.plot(own[:, 0] / 1e3, own[:, 1] / 1e3, "k-", label="ownship")
     a1.plot(truth[:, 0] / 1e3, truth[:, 1] / 1e3, "g-", lw=2, label="target (truth)")
     a1.plot(resolved[:, 0] / 1e3, resolved[:, 1] / 1e3, "*-", color="tab:orange", ms=6,
@@ -212,6 +246,4 @@ def plot_lr_example(own: np.ndarray, truth: np.ndarray, known: np.ndarray,
     a2.set_ylim(-0.05, 1.05)
     a2.grid(alpha=0.3)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(out_png, dpi=120)
-    plt.close(fig)
+    return finish(fig, new, LR_LAYOUT)
