@@ -19,16 +19,9 @@ commands that use them, so ``--version`` and ``info`` start quickly.
 from __future__ import annotations
 
 import argparse
+import importlib
 from typing import Any
 
-from arrayproc.app.describe import info
-from arrayproc.app.export import export
-from arrayproc.app.inputs import (
-    PLOT_INPUTS,
-    TRACK_INPUT,
-    check_plot_input,
-    check_product_input,
-)
 from arrayproc.app.options import (
     add_config,
     add_geometry_options,
@@ -39,8 +32,6 @@ from arrayproc.app.options import (
     geometry_inputs,
     geometry_of,
 )
-from arrayproc.app.plotting import PLOT_PRIORITY, default_plot_kind, plot
-from arrayproc.app.process import process
 from arrayproc.app.progress import (
     Echo,
     Summary,
@@ -50,25 +41,52 @@ from arrayproc.app.progress import (
     products_what,
     recording_what,
 )
-from arrayproc.app.recordings import import_wavs, simulate, start_time_from_names
-from arrayproc.app.tracking import tma, track, tracks_summary
 from arrayproc.io.atomic import check_output
 
-__all__ = ["PLOT_INPUTS", "PLOT_PRIORITY", "TRACK_INPUT", "Echo", "add_geometry_options",
-           "add_parser", "check_plot_input", "check_product_input", "default_plot_kind",
-           "export", "geometry", "import_wavs", "info", "plot", "process", "simulate",
-           "start_time_from_names", "tma", "track"]
+#: The library functions, imported on first use (building the parser stays cheap: the
+#: modules behind ``info`` alone import h5py and numpy).
+_LIBRARY = {
+    "info": "arrayproc.app.describe",
+    "process": "arrayproc.app.process",
+    "import_wavs": "arrayproc.app.recordings",
+    "simulate": "arrayproc.app.recordings",
+    "start_time_from_names": "arrayproc.app.recordings",
+    "plot": "arrayproc.app.plotting",
+    "default_plot_kind": "arrayproc.app.plotting",
+    "PLOT_PRIORITY": "arrayproc.app.plotting",
+    "check_plot_input": "arrayproc.app.inputs",
+    "check_product_input": "arrayproc.app.inputs",
+    "PLOT_INPUTS": "arrayproc.app.inputs",
+    "TRACK_INPUT": "arrayproc.app.inputs",
+    "track": "arrayproc.app.tracking",
+    "tma": "arrayproc.app.tracking",
+    "tracks_summary": "arrayproc.app.tracking",
+    "export": "arrayproc.app.export",
+}
+
+__all__ = ["Echo", "add_geometry_options", "add_parser", "geometry", *_LIBRARY]
 
 _quiet = no_echo  # the name the demo used
 
 
+def __getattr__(name: str) -> Any:
+    mod = _LIBRARY.get(name)
+    if mod is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(mod), name)
+    globals()[name] = value
+    return value
+
+
 # -- run: parsed arguments -> library call -> summary line ----------------------------------
 def _run_info(args: argparse.Namespace) -> int:
+    from arrayproc.app.describe import info
     info(args.file, positions=geometry_of(args), echo=no_echo if args.quiet else print)
     return 0
 
 
 def _run_process(args: argparse.Namespace) -> int:
+    from arrayproc.app.process import process
     from arrayproc.app.resources import parse_bytes
     done = Summary.of(args)
     check_output(args.output, [args.recording, args.config, *geometry_inputs(args)])
@@ -81,6 +99,7 @@ def _run_process(args: argparse.Namespace) -> int:
 
 
 def _run_import(args: argparse.Namespace) -> int:
+    from arrayproc.app.recordings import import_wavs
     done = Summary.of(args)
     check_output(args.output, [*args.wav, *geometry_inputs(args)])
     r = import_wavs(args.wav, args.output, positions=geometry_of(args), scale=args.scale,
@@ -92,6 +111,7 @@ def _run_import(args: argparse.Namespace) -> int:
 
 
 def _run_simulate(args: argparse.Namespace) -> int:
+    from arrayproc.app.recordings import simulate
     done = Summary.of(args)
     simulate(args.scenario, args.output, seed=args.seed, duration=args.duration,
              progress=bar_wanted(args))
@@ -100,6 +120,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
 
 
 def _run_plot(args: argparse.Namespace) -> int:
+    from arrayproc.app.plotting import plot
     kind = plot(args.file, args.output, kind=args.kind, beam=args.beam,
                 range_db=args.range_db, truth=not args.no_truth)
     if not args.quiet:
@@ -108,6 +129,7 @@ def _run_plot(args: argparse.Namespace) -> int:
 
 
 def _run_track(args: argparse.Namespace) -> int:
+    from arrayproc.app.tracking import track, tracks_summary
     done = Summary.of(args)
     track(args.products, args.config, args.output, progress=bar_wanted(args))
     done(args.output, tracks_summary(args.output), audio_seconds(args.output))
@@ -115,6 +137,7 @@ def _run_track(args: argparse.Namespace) -> int:
 
 
 def _run_tma(args: argparse.Namespace) -> int:
+    from arrayproc.app.tracking import tma
     done = Summary.of(args)
     tma(args.products, args.config, args.output, progress=bar_wanted(args))
     done(args.output, products_what(args.output), audio_seconds(args.output))
@@ -122,6 +145,7 @@ def _run_tma(args: argparse.Namespace) -> int:
 
 
 def _run_export(args: argparse.Namespace) -> int:
+    from arrayproc.app.export import export
     done = Summary.of(args)
     n = export(args.files, args.to, args.output, origin=tuple(args.origin))
     audio = [audio_seconds(f) for f in args.files]

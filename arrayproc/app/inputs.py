@@ -11,7 +11,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from arrayproc.errors import FormatError
-from arrayproc.io.schema import kind as schema_kind
 
 #: What each plot reads: the product kind and the columns it needs.
 PLOT_INPUTS: dict[str, tuple[str, tuple[str, ...]]] = {
@@ -56,6 +55,7 @@ def check_product_input(path: str, use: str, spec: tuple[str, tuple[str, ...]],
 
     from arrayproc.io.h5 import attr_str, get_object, open_h5
     from arrayproc.io.products import FORMAT, group_names
+    from arrayproc.io.schema import kind as schema_kind
     pkind, names = spec
     k = schema_kind(pkind)
     cols = {c: 1 + len(k.columns[c].trailing) for c in names}
