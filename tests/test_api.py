@@ -47,9 +47,11 @@ def test_every_model_filter_and_tma_method_is_exported():
 
 def test_load_chain_has_one_home():
     import arrayproc.chain
+    import arrayproc.stages
     from arrayproc.app import api
     assert not hasattr(arrayproc.chain, "load_chain")
-    assert arrayproc.load_chain is api.load_chain
+    assert arrayproc.load_chain is api.load_chain is arrayproc.stages.load_chain
+    assert arrayproc.build_chain is api.build_chain is arrayproc.stages.build_chain
 
 
 def test_api_run_chain_takes_the_engines_progress_callback(tmp_path, rng):

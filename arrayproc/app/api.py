@@ -1,77 +1,23 @@
 """The public API behind ``import arrayproc``: chains built with every stage type registered,
 recordings and products opened in one call.
 
-The engine (:mod:`arrayproc.chain`) knows no stage by name; this layer imports the modules of
-the stages a chain names (:func:`arrayproc.stages.load`) before it is built. A chain file is
-read only here (:func:`load_chain`; the engine builds from mappings): ``build_chain`` and
-``run_chain`` do what the engine's functions of the same names do, for any chain, plus the
-stage imports and the progress bar.
+The engine (:mod:`arrayproc.chain`) knows no stage by name; :func:`load_chain` and
+:func:`build_chain` (defined in :mod:`arrayproc.stages`, the layer that knows the stage
+modules, so that the evaluation layer uses the same ones) import the modules of the stages a
+chain names before it is built. A chain file is read only there (the engine builds from
+mappings). ``build_chain`` and ``run_chain`` do what the engine's functions of the same names
+do, for any chain, plus the stage imports and the progress bar.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any
 
 from arrayproc import chain as _chain
-from arrayproc.config import read_toml
-from arrayproc.errors import ConfigError
-from arrayproc.stages import TYPES, load_all
-from arrayproc.stages import load as _load
+from arrayproc.stages import build_chain, load_chain
 
-
-def build_chain(config: Mapping[str, Any] | str, text: str = "") -> _chain.ChainSpec:
-    """Build and validate a chain from a parsed TOML mapping or TOML text.
-
-    Parameters
-    ----------
-    config : mapping or str
-        The chain (``[input]`` and ``[[stage]]`` tables) or its TOML text.
-    text : str
-        The TOML text, kept in the products file for provenance.
-
-    Returns
-    -------
-    ChainSpec
-        The stages, validated before any data is read.
-    """
-    config, text = _chain.graph.parse_chain(config, text)
-    _load_types(config)
-    return _chain.build_chain(config, text)
-
-
-def load_chain(path: str) -> _chain.ChainSpec:
-    """Read and validate a chain TOML file (see :func:`build_chain`).
-
-    Parameters
-    ----------
-    path : str
-        Chain file.
-
-    Returns
-    -------
-    ChainSpec
-    """
-    cfg, text = read_toml(path, "chain")
-    _load_types(cfg)
-    try:
-        return _chain.build_chain(cfg, text)
-    except ConfigError as e:
-        raise ConfigError(f"{path}: {e}") from None
-
-
-def _load_types(config: Any) -> None:
-    """Import only the stage modules the chain names (start-up stays short); when it names a
-    type no module defines, import them all, so the chain builder's refusal lists every known
-    type, not only those loaded so far."""
-    tables = config.get("stage", []) if isinstance(config, Mapping) else []
-    if isinstance(tables, list):
-        types = [t.get("type") for t in tables
-                 if isinstance(t, Mapping) and isinstance(t.get("type"), str)]
-        if any(t not in TYPES for t in types):
-            load_all()
-        else:
-            _load(types)
+__all__ = ["build_chain", "load_chain", "run_chain"]
 
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,

@@ -6,13 +6,19 @@ CFAR) and ``narrowband`` (EKF bearing/frequency tracker).
 Each stage module registers its stage types when imported. :data:`TYPES` says which module
 defines each chain ``type`` without importing anything, so a chain imports only the modules
 of the stages it uses (:func:`load`); a test checks that it matches the registrations. The
-engine (:mod:`arrayproc.chain`) knows none of them by name.
+engine (:mod:`arrayproc.chain`) knows none of them by name; :func:`load_chain` and
+:func:`build_chain` here (``arrayproc.load_chain``, ``arrayproc.build_chain``) import the
+modules of the stages a chain names, then build it with the engine.
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from arrayproc.chain import ChainSpec
 
 #: chain ``type`` -> module that registers it
 TYPES: dict[str, str] = {
@@ -49,3 +55,62 @@ def load_all() -> None:
     """Import every stage module, which registers every stage type."""
     for mod in sorted(set(TYPES.values())):
         importlib.import_module(mod)
+
+
+def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
+    """Build and validate a chain from a parsed TOML mapping or TOML text.
+
+    Parameters
+    ----------
+    config : mapping or str
+        The chain (``[input]`` and ``[[stage]]`` tables) or its TOML text.
+    text : str
+        The TOML text, kept in the products file for provenance.
+
+    Returns
+    -------
+    ChainSpec
+        The stages, validated before any data is read.
+    """
+    from arrayproc.chain import build_chain as _build
+    from arrayproc.chain import graph
+    config, text = graph.parse_chain(config, text)
+    load_types(config)
+    return _build(config, text)
+
+
+def load_chain(path: str) -> ChainSpec:
+    """Read and validate a chain TOML file (see :func:`build_chain`).
+
+    Parameters
+    ----------
+    path : str
+        Chain file.
+
+    Returns
+    -------
+    ChainSpec
+    """
+    from arrayproc.chain import build_chain as _build
+    from arrayproc.config import read_toml
+    from arrayproc.errors import ConfigError
+    cfg, text = read_toml(path, "chain")
+    load_types(cfg)
+    try:
+        return _build(cfg, text)
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None
+
+
+def load_types(config: Any) -> None:
+    """Import only the stage modules the chain names (start-up stays short); when it names a
+    type no module defines, import them all, so the chain builder's refusal lists every known
+    type, not only those loaded so far."""
+    tables = config.get("stage", []) if isinstance(config, Mapping) else []
+    if isinstance(tables, list):
+        types = [t.get("type") for t in tables
+                 if isinstance(t, Mapping) and isinstance(t.get("type"), str)]
+        if any(t not in TYPES for t in types):
+            load_all()
+        else:
+            load(types)
