@@ -61,7 +61,7 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
         raise ArrayprocError(f"--beam must be a finite cone angle in deg, got {beam:g}")
     from arrayproc.io.atomic import commit, discard, temporary_sibling
     fmt = _image_format(output)
-    from arrayproc.io.recording import open_h5
+    from arrayproc.io.h5 import open_h5
     open_h5(file, "products file").close()
     kind = kind or default_plot_kind(file)
     check_plot_input(file, kind)
