@@ -22,11 +22,11 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
     (:func:`draw_btr`). ``beam`` is unused (LOFAR only)."""
     g, root = find_group(path, "btr")
     write_figure(lambda ax: draw_btr(g, root, ax, range_db=range_db, truth=truth,
-                                     name=Path(path).name), out_png, LAYOUT)
+                                     file=Path(path).name), out_png, LAYOUT)
 
 
 def draw_btr(g: dict, root: dict, ax: Any = None, range_db: float = 20.0, truth: bool = True,
-             name: str = "") -> Any:
+             file: str = "") -> Any:
     """Draw a BTR: cone angle across, time running down.
 
     Parameters
@@ -43,7 +43,7 @@ def draw_btr(g: dict, root: dict, ax: Any = None, range_db: float = 20.0, truth:
     truth : bool
         When the recording named by ``source`` holds ``/truth``, draw the true cone angles of
         the sources as dotted lines.
-    name : str
+    file : str
         The file name shown under the title.
 
     Returns
@@ -85,5 +85,5 @@ def draw_btr(g: dict, root: dict, ax: Any = None, range_db: float = 20.0, truth:
     ax.set_ylabel("time (s since recording start)")
     lo, hi = g["attrs"].get("freq_lo"), g["attrs"].get("freq_hi")
     band = f", {lo:g}-{hi:g} Hz" if lo is not None else ""
-    ax.set_title(f"BTR{band}\n{name}", fontsize=10)
+    ax.set_title(f"BTR{band}\n{file}", fontsize=10)
     return finish(fig, new, LAYOUT)

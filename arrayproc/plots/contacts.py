@@ -33,18 +33,18 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
     g, root = find_group(path, "contacts")
     write_figure(lambda axes: draw_contacts(
         g, root, axes, doppler_mps=doppler_mps, threshold_kn=threshold_kn,
-        snr_min_db=snr_min_db, truth=truth, name=Path(path).name), out_png, LAYOUT)
+        snr_min_db=snr_min_db, truth=truth, file=Path(path).name), out_png, LAYOUT)
 
 
 def draw_contacts(g: dict, root: dict, axes: Any = None, doppler_mps: float = 5.0,
                   threshold_kn: float = 2.0, snr_min_db: float = 15.0, truth: bool = True,
-                  name: str = "") -> Any:
+                  file: str = "") -> Any:
     """Draw active contacts (module doc) on two axes: range against cone angle, and the ECDF
     of |absolute Doppler|.
 
     ``g`` is a ``contacts`` products group and ``root`` the file's root attributes (its
     ``source`` recording's ``/truth/echoes`` are marked when ``truth``); ``axes`` a pair of
-    matplotlib Axes (default: a new figure); ``name`` the file name in the title.
+    matplotlib Axes (default: a new figure); ``file`` the file name in the title.
     ``doppler_mps`` sets the colour scale (+-, m/s); ``threshold_kn`` the ECDF's marker; only
     contacts of at least ``snr_min_db`` are drawn (the thesis's fig. 4.10 takes the contacts
     "exceeding a preset SNR threshold"; the CFAR's own false alarms sit just above its
@@ -89,7 +89,7 @@ def draw_contacts(g: dict, root: dict, axes: Any = None, doppler_mps: float = 5.
     ax.set_xlim(0, 180)
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"contacts with SNR >= {snr_min_db:g} dB: {c['range_m'].size} of {n_all}, "
-                 f"{np.unique(c['ping']).size} pings\n{name}", fontsize=10)
+                 f"{np.unique(c['ping']).size} pings\n{file}", fontsize=10)
     sens = clutter & (wv != "hfm") & (wv != "lfm")
     a = np.sort(np.abs(c["absolute_doppler_mps"][sens]) / KNOT)
     if a.size:

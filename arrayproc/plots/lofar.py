@@ -28,11 +28,11 @@ def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | No
     ``lofar`` group of ``path`` into ``out_png`` (:func:`draw_lofar`)."""
     g, root = find_group(path, "lofar")
     write_figure(lambda ax: draw_lofar(g, root, ax, range_db=range_db, beam=beam, truth=truth,
-                                       name=Path(path).name), out_png, LAYOUT)
+                                       file=Path(path).name), out_png, LAYOUT)
 
 
 def draw_lofar(g: dict, root: dict, ax: Any = None, range_db: float = 20.0,
-               beam: float | None = None, truth: bool = True, name: str = "") -> Any:
+               beam: float | None = None, truth: bool = True, file: str = "") -> Any:
     """Draw the LOFAR-gram of one beam: frequency across, time running down.
 
     Parameters
@@ -53,7 +53,7 @@ def draw_lofar(g: dict, root: dict, ax: Any = None, range_db: float = 20.0,
     truth : bool
         Each source's Doppler-shifted tonals as dashed lines while the source is within
         ±TRUTH_GATE_DEG of the beam, when the recording holds ``/truth``.
-    name : str
+    file : str
         The file name shown under the title.
 
     Returns
@@ -104,5 +104,5 @@ def draw_lofar(g: dict, root: dict, ax: Any = None, range_db: float = 20.0,
     ax.set_ylim(t[-1] + dt / 2, t[0] - dt / 2)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("time (s since recording start)")
-    ax.set_title(f"LOFAR, beam {cone[b]:.1f} deg cone angle\n{name}", fontsize=10)
+    ax.set_title(f"LOFAR, beam {cone[b]:.1f} deg cone angle\n{file}", fontsize=10)
     return finish(fig, new, LAYOUT)

@@ -25,14 +25,14 @@ def plot_metrics(tracks_path: str, out_png: str, c: float = 1000.0, p: float = 2
 
     r = evaluate_tracks_file(tracks_path, c=c, p=p)
     write_figure(lambda axes: draw_metrics(r, axes, c=c, p=p,
-                                           name=os.path.basename(tracks_path)),
+                                           file=os.path.basename(tracks_path)),
                  out_png, LAYOUT, dpi=120)
 
 
 def draw_metrics(r: dict, axes: Any = None, c: float = 1000.0, p: float = 2.0,
-                 name: str = "") -> Any:
+                 file: str = "") -> Any:
     """Draw the metrics of :func:`arrayproc.evaluate.metrics.evaluate_tracks_file` (``r``,
-    computed with ``c`` and ``p``) on two axes (default: a new figure); ``name`` the tracks
+    computed with ``c`` and ``p``) on two axes (default: a new figure); ``file`` the tracks
     file in the title. Returns the matplotlib Figure."""
     t = r["times"] / 60.0
     fig, (a1, a2), new = subplots(axes, LAYOUT)
@@ -63,5 +63,5 @@ def draw_metrics(r: dict, axes: Any = None, c: float = 1000.0, p: float = 2.0,
     a2.set_ylim(0, 105)
     a2.set_title(f"{r['n_confirmed']} confirmed tracks, {len(r['false_tracks'])} false",
                  fontsize=9)
-    a1.set_title(f"{name}: multi-target metrics against truth")
+    a1.set_title(f"{file}: multi-target metrics against truth")
     return finish(fig, new, LAYOUT)

@@ -30,7 +30,7 @@ def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: in
     g, root = find_group(path, "range_doppler")
     row = range_doppler_row(g, ping, cone, path)
     write_figure(lambda ax: draw_range_doppler(g, root, row, ax, range_db=range_db,
-                                               truth=truth, name=Path(path).name),
+                                               truth=truth, file=Path(path).name),
                  out_png, LAYOUT)
 
 
@@ -51,12 +51,12 @@ def range_doppler_row(g: dict, ping: int | None = None, cone: float | None = Non
 
 
 def draw_range_doppler(g: dict, root: dict, i: int = 0, ax: Any = None, range_db: float = 30.0,
-                       truth: bool = True, name: str = "") -> Any:
+                       truth: bool = True, file: str = "") -> Any:
     """Draw row ``i`` of a ``range_doppler`` products group: range across, range rate up,
     |χ|² in dB re its peak over ``range_db`` dB; the true echoes of the ping within 3 deg of
     the beam when ``truth`` and the ``source`` recording of ``root`` has ``/truth/echoes``.
 
-    ``ax`` is a matplotlib Axes (default: a new figure); ``name`` the file name in the title.
+    ``ax`` is a matplotlib Axes (default: a new figure); ``file`` the file name in the title.
     Returns the matplotlib Figure.
     """
     pings = np.asarray(g["ping"]).reshape(-1)
@@ -90,5 +90,5 @@ def draw_range_doppler(g: dict, root: dict, i: int = 0, ax: Any = None, range_db
     ax.set_xlabel("range from the array (m)")
     ax.set_ylabel("range rate (m/s, positive opening)")
     ax.set_title(f"range-Doppler, ping {int(pings[i])}, cone {cones[i]:.1f} deg\n"
-                 f"{name}", fontsize=10)
+                 f"{file}", fontsize=10)
     return finish(fig, new, LAYOUT)

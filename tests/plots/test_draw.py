@@ -28,7 +28,7 @@ def test_draw_btr_draws_on_the_given_axes():
     fig = Figure()
     ax, other = fig.subplots(1, 2)
     g, root = _btr_group()
-    assert draw_btr(g, root, ax, truth=False, name="x.h5") is fig
+    assert draw_btr(g, root, ax, truth=False, file="x.h5") is fig
     assert ax.get_xlabel().startswith("cone angle") and ax.get_title() == \
         "BTR, 100-400 Hz\nx.h5"
     assert other.get_title() == "" and not other.images  # nothing drawn beside it
