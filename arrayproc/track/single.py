@@ -59,6 +59,7 @@ from arrayproc.config import read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.angles import wrap_pi
 from arrayproc.geo.nav import Nav
+from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 from arrayproc.track.filters import FILTERS, FilterDivergence, make_filter
 from arrayproc.track.init import TrackPrior, initial_state
@@ -135,7 +136,7 @@ def load_single_config(path: str) -> dict[str, Any]:
 def _read_bearings(prod: dict, name: str | None, products_path: str,
                    cone_gate: list[float] | None = None,
                    level: str | None = None) -> dict[str, np.ndarray]:
-    groups = list(prod.groups("bearings"))
+    groups = groups_of_kind(prod, "bearings")
     if name is not None:
         if name not in prod or name == "/":
             raise FormatError(f"{products_path}: no group {name!r}")

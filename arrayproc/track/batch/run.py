@@ -86,6 +86,7 @@ from arrayproc.config import Param, positive, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, delays_columns, read_products
 from arrayproc.io.recording import Recording
+from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 
 from .bo_tma import solve_line_bearings
@@ -189,7 +190,7 @@ def _group(prod: dict, kind: str, name: str, path: str) -> tuple[str, dict]:
             raise FormatError(f"{path}: group {name!r} is of kind "
                               f"{as_text(prod[name].get('kind'))!r}, not {kind!r}")
         return name, prod[name]
-    names = list(prod.groups(kind))
+    names = groups_of_kind(prod, kind)
     if not names:
         raise FormatError(f"{path}: no {kind} group")
     if len(names) > 1:
