@@ -104,7 +104,7 @@ def cpu(f, *a, **k):
 class Phases:
     """CPU/wall time spent in the named module functions during a solution."""
 
-    NAMES = ((R, "differential_evolution"), (R, "least_squares"), (td, "td_cost_population"),
+    NAMES = ((R, "evolve"), (R, "leastsq"), (td, "td_cost_population"),
              (td, "td_model_jacobian"), (td, "plane_wave_directions"), (td, "finish_solution"))
 
     def __enter__(self):
@@ -251,8 +251,8 @@ def main() -> int:
           f"{npy['wall_s']:.2f} s wall", flush=True)
     for n, m in r["numba"].items():
         ph = m["phases"]
-        de, obj = ph["differential_evolution"], ph["td_cost_population"]
-        ls, mj = ph["least_squares"], ph["td_model_jacobian"]
+        de, obj = ph["evolve"], ph["td_cost_population"]
+        ls, mj = ph["leastsq"], ph["td_model_jacobian"]
         print(f"  numba {n} thread(s): {m['cpu_s']:.3f} s CPU, {m['wall_s']:.3f} s wall -> "
               f"{npy['wall_s'] / m['wall_s']:.1f}x wall, {npy['cpu_s'] / m['cpu_s']:.1f}x CPU; "
               f"wall: DE {de['wall_s']:.3f} s (objective {obj['wall_s']:.3f} s in "
