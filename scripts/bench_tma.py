@@ -2,8 +2,9 @@
 """Benchmark: batch TMA, numba against plain numpy/scipy, in one process (issue 15).
 
 1. One TD-TMA solution, 128 hydrophones × 100 snapshots (thesis eqs. (3.51)-(3.52)):
-   :func:`arrayproc.track.batch.td_tma.solve_delays` — differential evolution (scipy) over the
-   population-vectorised numba objective, a ``least_squares`` polish whose residuals and
+   :func:`arrayproc.track.batch.td_tma.solve_delays` — differential evolution
+   (:mod:`arrayproc.track.batch.evolution`, whole-population generations) over the
+   population-vectorised numba objective, a ``leastsq`` polish whose residuals and
    Jacobian come from one numba kernel, the FIM as the weighted Jacobian's Gram matrix and
    the plane-wave bounds vectorised — against the same solver with the objective, the
    residuals and the Jacobian written in numpy as a careful user writes them (the population
