@@ -140,3 +140,24 @@ def test_follow_refuses_bad_idle(tmp_path, idle):
                        capture_output=True, text=True, env=ENV, cwd=REPO)
     assert p.returncode == 2 and p.stderr.startswith("arrayproc: error: --idle")
     assert not (tmp_path / "o.h5").exists()
+
+
+def test_signal_handler_in_a_live_run_ends_the_stream_then_stops():
+    """The first signal of a --follow run is only recorded (the stream ends, the writers go
+    on); a second one raises, and the run stops without output."""
+    from arrayproc.app.cli import _on_signal
+    from arrayproc.errors import Interrupted
+    from arrayproc.io.atomic import check_stop, clear_stop, graceful, set_graceful
+    clear_stop()
+    set_graceful(True)
+    try:
+        assert _on_signal(signal.SIGINT, None) is None
+        check_stop()              # no raise: the live products can still be finished
+        with pytest.raises(Interrupted):
+            _on_signal(signal.SIGTERM, None)
+        assert not graceful()
+        with pytest.raises(Interrupted):
+            check_stop()
+    finally:
+        set_graceful(False)
+        clear_stop()
