@@ -88,6 +88,12 @@ _KINDS = [
         "freq_hi": _c("Hz", "upper edge of the band or line"),
         "spl_db": _c("dB re 1 µPa", "sound pressure level at the array (broadband)"),
     }),
+    Kind("doa", "root-MUSIC direction of one bin of a covariance group", {
+        "time": _c("s", "mean centre time of the group's snapshots"),
+        "freq": _c("Hz", "frequency of the bin"),
+        "cone_deg": _c("deg", "cone angle of the root (0 forward end-fire)"),
+        "radius": _c("", "modulus of the polynomial root (1 on the unit circle)"),
+    }),
     Kind("ibf_removed", "plane wave removed by inverse beamforming", {
         "time": _c("s", "centre time of the snapshot"),
         "cone_deg": _c("deg", "cone angle of the removed wave"),
