@@ -30,9 +30,12 @@ def spectra(pos: np.ndarray, freqs: np.ndarray, cones: list[float], snr_db: floa
     x = noise * (rng.standard_normal(shape + (c,)) + 1j * rng.standard_normal(shape + (c,)))
     x /= np.sqrt(2.0)
     amp = noise * 10 ** (snr_db / 20)
-    common = (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) / np.sqrt(2)
+    def gauss():
+        return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) / np.sqrt(2)
+
+    common = gauss()
     for cone in cones:
-        s = common if coherent else (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) / np.sqrt(2)
+        s = common if coherent else gauss()
         x += amp * s[..., None] * steer(pos, cone, freqs)[None]
     return x
 

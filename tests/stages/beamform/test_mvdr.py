@@ -110,8 +110,10 @@ def test_wng_constraint_matches_closed_form():
         if 10 * np.log10(w0) >= floor_db:
             assert delta[0, j] == 0.0
             continue
-        d = brentq(lambda x: 10 * np.log10(closed_form(a, v, s2, 1.0, x)[1]) - floor_db,
-                   0.0, 1e8, xtol=1e-12, rtol=1e-12)
+        def excess(x, a=a):
+            return 10 * np.log10(closed_form(a, v, s2, 1.0, x)[1]) - floor_db
+
+        d = brentq(excess, 0.0, 1e8, xtol=1e-12, rtol=1e-12)
         assert abs(delta[0, j] / d - 1) < 1e-6, (c, delta[0, j], d)
         assert abs(10 * np.log10(wng[0, j]) - floor_db) < 1e-6
         assert abs(power[0, j] * closed_form(a, v, s2, 1.0, d)[0] ** -1 - 1) < 1e-6
