@@ -18,9 +18,11 @@ kd → 0. Weights (``weights``):
 
   the array-level form of the per-station cardioid of a triplet (Groen et al. 2005): white-noise
   gain N(1 − |ρ|²), so the mirror of a source at per-element SNR s in white noise stands
-  10 log10(1 + N(1 − |ρ|²) s) dB below it. ``wng_db`` caps the noise amplification: γ < 1 is
-  the largest null depth whose WNG N(1 − γ|ρ|²)²/(1 − 2γ|ρ|² + γ²|ρ|²) still reaches the floor
-  (then the mirror's signal response is |ρ|(1 − γ)/(1 − γ|ρ|²));
+  10 log10(1 + N(1 − |ρ|²) s) dB below it. Near end-fire (|ρ| → 1) the full null would
+  amplify the noise without bound, so ``wng_loss_db`` (default 10 dB) caps the loss of
+  white-noise gain against delay-and-sum (WNG floor G = N / 10^(loss/10)): where N(1 − |ρ|²)
+  < G, γ < 1 is the deepest null whose WNG N(1 − γ|ρ|²)²/(1 − 2γ|ρ|² + γ²|ρ|²) still reaches
+  G (then the mirror's signal response is |ρ|(1 − γ)/(1 − γ|ρ|²) of the look's);
 - ``"adaptive"``: MVDR over the whole array on these beams (``mvdr`` keys ``snapshots``,
   ``loading``, ``wng_db``): the adaptive port/starboard beamformer of Groen et al. (2005),
   which places its null on the real source when steered at its mirror.
@@ -132,8 +134,10 @@ class LRCBF(Stage):
                        "relative bearings {start, stop, count}, deg in (-180, 180]"),
         "weights": Param("str", "cardioid", "das, cardioid or adaptive (MVDR)",
                          choices=("das", "cardioid", "adaptive")),
-        "wng_db": Param("float", None, "white-noise-gain floor of the cardioid (null depth "
-                        "reduced) or of the adaptive weights, dB"),
+        "wng_loss_db": Param("float", 10.0, "cardioid: largest loss of white-noise gain "
+                             "against delay-and-sum, dB (the null is made shallower beyond)",
+                             check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
+        "wng_db": Param("float", None, "adaptive: white-noise-gain floor, dB (as mvdr)"),
         "loading": Param("float", 0.01, "adaptive: diagonal loading re the mean element power",
                          check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
         "batch": Param("int", 32, "snapshots per output block (das, cardioid)", check=positive),
@@ -187,8 +191,9 @@ class LRCBF(Stage):
             if key != self._key:
                 self._check_geometry(spec.positions)
                 self._key = key
+                floor = 10 * np.log10(spec.positions.shape[0]) - self.wng_loss_db
                 w = lr_weights(spec.positions, self.beam_axis, spec.freqs,
-                               self.ctx.sound_speed, self.weights, self.wng_db)
+                               self.ctx.sound_speed, self.weights, floor)
                 self._w = np.ascontiguousarray(w.conj().astype(np.complex64))  # (F, C, B)
             for i in range(0, spec.data.shape[0], self.batch):
                 yield self._beams(spec, slice(i, i + self.batch))

@@ -11,7 +11,7 @@ from arrayproc.chain.domains import Domain
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array, triplet_array, twin_line_array
 from arrayproc.stages.beamform.cbf import element_delays
-from arrayproc.stages.beamform.lr_cbf import LRCBF, lr_weights, mirror_correlation
+from arrayproc.stages.beamform.lr_cbf import LRCBF, lr_weights, mirror_correlation, null_depth
 from tests.stages.beamform.adaptive_synth import C, blocks
 
 BEAMS = {"start": -179.0, "stop": 180.0, "count": 360}
@@ -44,24 +44,39 @@ def test_mirror_correlation_closed_form(geometry):
     assert np.max(np.abs(got - want)) < 1e-12
 
 
+def rejection_closed_form(n, q, snr, gamma):
+    """Look over mirror beam power of a source at per-element SNR ``snr`` in unit white noise
+    for the weights (a − γρ a_m)/(1 − γ|ρ|²) (scaled by N): look N² s + ‖w‖², mirror
+    N² |ρ|² (1 − γ)²/(1 − γ|ρ|²)² s + ‖w‖², ‖w‖² = N (1 − 2γ|ρ|² + γ²|ρ|²)/(1 − γ|ρ|²)².
+    γ = 0 is delay-and-sum, (N s + 1)/(N |ρ|² s + 1); γ = 1 the full null, 1 + N(1 − |ρ|²) s."""
+    norm = n * (1 - 2 * gamma * q + gamma**2 * q) / (1 - gamma * q) ** 2
+    mirror = n * n * q * (1 - gamma) ** 2 / (1 - gamma * q) ** 2 * snr
+    return 10 * np.log10((n * n * snr + norm) / (mirror + norm))
+
+
 @pytest.mark.parametrize("geometry", ["twin", "triplet"])
-@pytest.mark.parametrize("weights", ["das", "cardioid"])
-def test_rejection_against_kd_matches_closed_form(geometry, weights, rng):
+@pytest.mark.parametrize("weights,loss_db", [("das", 10.0), ("cardioid", 10.0),
+                                             ("cardioid", 60.0)])
+def test_rejection_against_kd_matches_closed_form(geometry, weights, loss_db, rng):
     """Measured look-over-mirror beam power of a source at β = 60° (0 dB per element per bin)
-    over kd = 0.07 … 1.5 against the closed forms: delay-and-sum (N s + 1)/(N ρ² s + 1),
-    cardioid 1 + N (1 − ρ²) s. 1000 snapshots: each power within ~3 %, so 0.6 dB."""
+    over kd = 0.07 … 1.5 against :func:`rejection_closed_form`, with the null depth γ of the
+    WNG-loss cap (10 dB: shallower nulls at small kd; 60 dB: the full null everywhere here).
+    1000 snapshots: each power within ~3 %, so 0.6 dB."""
     pos = twin_line_array(16, 0.75, 0.2) if geometry == "twin" else triplet_array(12, 0.75, 0.115)
     freqs = np.arange(100.0, 2000.1, 150.0)
     n, snr, b0 = pos.shape[0], 1.0, 60.0
     x = source_spectra(pos, freqs, b0, snr, 1000, rng)
-    st = LRCBF(weights=weights, beams=BEAMS)
+    st = LRCBF(weights=weights, beams=BEAMS, wng_loss_db=loss_db)
     y = np.concatenate([o.data for o in st.process(blocks(x, freqs, pos, per_block=250))])
     p = (np.abs(y) ** 2).mean(axis=0)
     look, mirror = np.argmin(np.abs(st.beam_axis - b0)), np.argmin(np.abs(st.beam_axis + b0))
     got = 10 * np.log10(p[:, look] / p[:, mirror])
     q = np.abs(mirror_correlation(pos, np.array([b0]), freqs, C)[:, 0]) ** 2
-    want = (10 * np.log10((n * snr + 1) / (n * q * snr + 1)) if weights == "das"
-            else 10 * np.log10(1 + n * (1 - q) * snr))
+    gamma = (np.zeros_like(q) if weights == "das"
+             else null_depth(q, n, 10 * np.log10(n) - loss_db))
+    if loss_db == 10.0 and weights == "cardioid":
+        assert np.any(gamma < 1) and np.any(gamma == 1)
+    want = rejection_closed_form(n, q, snr, gamma)
     assert np.max(np.abs(got - want)) < 0.6, np.c_[got, want]
 
 
