@@ -25,6 +25,7 @@ import numpy as np
 from arrayproc.chain import Stage
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
+from arrayproc.dsp import workers
 from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform._common import SpectraFramer
 
@@ -50,13 +51,13 @@ def _circ_mean_deg(a: np.ndarray) -> float:
 
 
 def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nfft: int,
-                      hop: int, window: str, band: tuple[float, float] | None
-                      ) -> Iterator[CovarianceGroup]:
+                      hop: int, window: str, band: tuple[float, float] | None,
+                      threads: int = 1) -> Iterator[CovarianceGroup]:
     """The sample covariance (Van Trees eq. 7.8) of every complete group of ``snapshots``
     snapshots of the stage's input (time blocks, framed here, or element-spectra blocks).
 
-    The outer products accumulate per block as one batched GEMM per bin (F, C, S) @ (F, S, C);
-    memory stays at one (F, C, C) accumulator whatever the group length."""
+    The outer products accumulate per block (:func:`accumulate`); memory stays at one
+    (F, C, C) accumulator whatever the group length."""
     rec = stage.ctx.recording
     nav = rec.nav if rec is not None else None
     framer = SpectraFramer(nfft, hop, window, band, nav)
@@ -98,13 +99,10 @@ def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nff
                 j += 1
             expected = int(ks[j - 1]) + 1
             if valid:
-                part = np.ascontiguousarray(x[i:j].transpose(1, 2, 0), np.complex128)
-                outer = part @ part.conj().transpose(0, 2, 1)  # (F, C, C)
                 if acc is None:
-                    acc = outer
+                    acc = np.zeros((x.shape[1], x.shape[2], x.shape[2]), np.complex128)
                     first_start = float(m.times[i]) - 0.5 * float(m.nfft) / spec.fs
-                else:
-                    acc += outer
+                accumulate(acc, x[i:j], threads)
                 n_in += j - i
                 times.extend(np.asarray(m.times[i:j], float))
                 heads.extend(np.asarray(m.headings[i:j], float))
@@ -114,6 +112,26 @@ def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nff
                                           _circ_mean_deg(heads), first_start, span, spec)
                     acc, valid = None, False
             i = j
+
+
+def accumulate(acc: np.ndarray, x: np.ndarray, threads: int = 1) -> None:
+    """``acc`` (F, C, C) += Σ_s x_s x_s^H for the snapshots ``x`` (S, F, C): per bin one
+    complex64 GEMM (F, C, S) @ (F, S, C) (BLAS reads the transposed operand in place), added
+    to the complex128 accumulator; the bins split over ``threads`` workers (the GEMMs release
+    the GIL). Single-precision products: their rounding (~1e-7 of the largest element) is far
+    below the sampling error of any covariance estimate (~1/√K) and below the loading."""
+    xf = np.ascontiguousarray(x.transpose(1, 0, 2), np.complex64)  # (F, S, C)
+    nf = xf.shape[0]
+
+    def run(sl: slice) -> None:
+        part = xf[sl]
+        acc[sl] += part.transpose(0, 2, 1) @ part.conj()
+
+    # always on the pool's workers, even one: they run single-threaded BLAS, where OpenBLAS's
+    # own threads in the calling thread cost 10x the CPU time on a loaded machine (measured)
+    n_thr = max(1, min(threads, nf // 16))
+    edges = [nf * k // n_thr for k in range(n_thr + 1)]
+    list(workers.pool(n_thr).map(run, [slice(edges[k], edges[k + 1]) for k in range(n_thr)]))
 
 
 def _spectra(stage: Stage, framer: SpectraFramer, b: Block) -> Block | None:

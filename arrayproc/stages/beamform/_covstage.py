@@ -80,14 +80,13 @@ class CovarianceStage(Stage):
         raise NotImplementedError
 
     def split_bins(self, fn: Callable[[slice], None], nf: int) -> None:
-        """Run ``fn(bins)`` on ``threads`` contiguous parts of the bins (numpy's batched
-        linear algebra and the kernels release the GIL)."""
+        """Run ``fn(bins)`` on ``threads`` contiguous parts of the bins, on the pool's workers
+        (single-threaded BLAS each; numpy's batched linear algebra and the kernels release the
+        GIL). Even one part goes to a worker: OpenBLAS's own threads in the calling thread
+        cost several times the CPU time on a loaded machine (measured)."""
         n_thr = max(1, min(workers.count(self.threads), nf // 8))
         edges = [nf * i // n_thr for i in range(n_thr + 1)]
         parts = [slice(edges[i], edges[i + 1]) for i in range(n_thr)]
-        if n_thr == 1:
-            fn(parts[0])
-            return
         list(workers.pool(n_thr).map(fn, parts))
 
     # -- compute -----------------------------------------------------------------------
@@ -109,7 +108,8 @@ class CovarianceStage(Stage):
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
         index = 0
         for g in covariance_groups(self, blocks, self.snapshots, self.nfft, self.hop,
-                                   self.window, None if self.band is None else tuple(self.band)):
+                                   self.window, None if self.band is None else tuple(self.band),
+                                   workers.count(self.threads)):
             p = self._group_power(g)
             b = g.block
             freqs, df = b.freqs, float(b.meta.df)
