@@ -30,7 +30,12 @@ from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform._covariance import exchange, forward_backward, spatial_smoothing
 from arrayproc.stages.beamform._covstage import COMMON, CovarianceStage
 from arrayproc.stages.beamform._steering import Steering, line_lags
-from arrayproc.stages.beamform._subspace import root_music, signal_projector, source_count
+from arrayproc.stages.beamform._subspace import (
+    root_music,
+    signal_projector,
+    source_count,
+    top_subspace,
+)
 
 
 def _sources(v: object) -> str | None:
@@ -97,19 +102,21 @@ class MUSIC(CovarianceStage):
         self._roots: dict[int, tuple] = {}
 
     def _subspace(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(eigenvalues ascending (f, L), eigenvectors (f, L, L), source count (f,))."""
+        """(eigenvalues ascending (f, K), eigenvectors (f, L, K), source count (f,)): the M
+        leading pairs only (K = M, block orthogonal iteration) for a given number of sources,
+        every pair (numpy's eigh) when it is estimated."""
         if self._perm is not None:
             r = forward_backward(r, self._perm)
         if self.smoothing > 1:
             r = spatial_smoothing(r, self._order, self.smoothing)
         else:
             r = r[..., self._order[:, None], self._order[None, :]]
-        lam, u = np.linalg.eigh(r)
         if isinstance(self.sources, int):
-            count = np.full(lam.shape[0], self.sources)
-        else:
-            count = source_count(lam, self.snapshots, self.sources)
-            count = np.clip(count, 0, min(self.max_sources, self._size - 1))
+            lam, u = top_subspace(r, self.sources)
+            return lam[:, ::-1], u[:, :, ::-1], np.full(lam.shape[0], self.sources)
+        lam, u = np.linalg.eigh(r)
+        count = source_count(lam, self.snapshots, self.sources)
+        count = np.clip(count, 0, min(self.max_sources, self._size - 1))
         return lam, u, count
 
     def spectrum(self, r: np.ndarray, bins: slice) -> np.ndarray:
