@@ -92,9 +92,10 @@ def mvdr_threshold(loading: float) -> float:
     return float(brentq(dip, -30.0, 40.0, xtol=1e-3))
 
 
-def part_resolution(groups: int, rng: np.random.Generator) -> dict:
+def part_resolution(groups: int, rng: np.random.Generator,
+                    snrs: np.ndarray | None = None) -> dict:
     pos = line_array(N, DX)
-    snrs = np.arange(-10.0, 20.1, 2.5)
+    snrs = np.arange(-10.0, 20.1, 2.5) if snrs is None else np.asarray(snrs, float)
     out: dict = {"snr_db": snrs.tolist(), "truth_deg": TRUTH, "cbf_width_deg": BW,
                  "groups": groups, "snapshots": 64}
     rates: dict[str, list[float]] = {"mvdr": [], "music": [], "cbf": []}
@@ -299,6 +300,8 @@ def main() -> None:
     ap.add_argument("--groups", type=int, default=50)
     ap.add_argument("--trials", type=int, default=500)
     ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--snr", help="comma-separated SNRs (dB) of the resolution part "
+                    "(default −10 … 20 every 2.5)")
     ap.add_argument("--out", default=".")
     ap.add_argument("--json")
     args = ap.parse_args()
@@ -308,7 +311,8 @@ def main() -> None:
     res: dict = {}
     parts = args.parts.split(",")
     if "resolution" in parts:
-        res["resolution"] = part_resolution(args.groups, rng)
+        snrs = None if args.snr is None else [float(v) for v in args.snr.split(",")]
+        res["resolution"] = part_resolution(args.groups, rng, snrs)
     if "wng" in parts:
         res["wng"] = part_wng(rng)
     if "crb" in parts:
