@@ -20,8 +20,9 @@ import numpy as np
 from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
 from arrayproc.sim._propagate_kernels import echo_accumulate
 from arrayproc.sim.motion import BodyOffsetMover, FixedMover, TrackMover
+from arrayproc.sim.multipath import ImageMover, images, rough_exponent
 from arrayproc.sim.propagation import LossLaw, PoseTrack, forward_time, grid_nodes, retarded_time
-from arrayproc.sim.scenario import ActiveSpec
+from arrayproc.sim.scenario import ActiveSpec, MultipathSpec
 from arrayproc.sim.sources import tonal_amplitude
 
 KEY_CLUTTER = 31
@@ -66,8 +67,13 @@ class ActiveSim:
 
     def __init__(self, spec: ActiveSpec, own: TrackMover, loss: LossLaw, c: float, fs: float,
                  fs_src: float, duration: float, seed: int, array_extent: float,
-                 source_movers: dict[str, TrackMover]) -> None:
+                 source_movers: dict[str, TrackMover],
+                 multipath: MultipathSpec | None = None) -> None:
         self.spec = spec
+        self.multipath = multipath
+        imgs = images(multipath)
+        #: (receive-leg image, transmit-leg image) of every echo path, the direct one first
+        self.path_pairs = [(ir, it) for ir in imgs for it in imgs]
         self.own = own
         self.loss = loss
         self.c = float(c)
@@ -130,6 +136,7 @@ class ActiveSim:
                 tr = forward_time(xt, ts, self.own, c)
                 arr.append((ts, tr))
             (ts, tr), (_, tr_end) = arr
+            tr_first, tr_last = self._path_span(sc, tp, T, tr, tr_end)
             pp, pv, _ = self.projector.state3(tp)
             tp3, tv, _ = sc.mover.state3(ts)
             rp, rv, _ = self.own.state3(tr)
@@ -150,11 +157,26 @@ class ActiveSim:
             rows["range_rate_mps"].append(rr)
             rows["level_db"].append(level)
             rows["range_m"].append(0.5 * (r1 + r2))
-            rows["t_start"].append(tr - pad - sc.alpha)
-            rows["t_end"].append(tr_end + pad + sc.alpha)
+            rows["t_start"].append(tr_first - pad - sc.alpha)
+            rows["t_end"].append(tr_last + pad + sc.alpha)
         self.windows = {k: np.concatenate(v) for k, v in rows.items()}
         order = np.lexsort((self.windows["target"], self.windows["ping"]))
         self.windows = {k: v[order] for k, v in self.windows.items()}
+
+    def _path_span(self, sc: Scatterer, tp: np.ndarray, T: np.ndarray, tr: np.ndarray,
+                   tr_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First and last arrival times at the array over every echo path of each ping."""
+        first, last = tr.copy(), tr_end.copy()
+        c = self.c
+        for ir, it in self.path_pairs[1:]:
+            proj = ImageMover(self.projector, it)
+            for te, is_end in ((tp, False), (tp + T, True)):
+                ts = forward_time(proj.state3(te)[0], te, sc.mover, c)
+                xt = ImageMover(sc.mover, ir).state3(ts)[0]
+                ta = forward_time(xt, ts, self.own, c)
+                first = np.minimum(first, ta) if not is_end else first
+                last = np.maximum(last, ta) if is_end else last
+        return first, last
 
     def truth(self) -> dict:
         """``/truth/pings`` (time, waveform name, source level) and ``/truth/echoes`` (DESIGN
@@ -224,19 +246,32 @@ class ActiveSim:
             k = int(w["ping"][i])
             tp = float(self.ping_times[k])
             name = self.ping_names[k]
-            tw = t[i0:i1]
-            # expansion points on the absolute grid (exact there), interpolated
-            tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
-            ts_g = tg - retarded_time(self.own.state3(tg)[0], tg, sc.mover, self.c)
-            te_g = ts_g - retarded_time(sc.mover.state3(ts_g)[0], ts_g, self.projector, self.c)
-            ts = np.interp(tw, tg, ts_g)
-            te = np.interp(tw, tg, te_g)
-            tpos, tvel, tacc = sc.mover.state3(ts)
-            ppos, pvel, pacc = self.projector.state3(te)
-            mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
-            echo_accumulate(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw,
-                            pose.rpos[i0:i1], pose.rdepth[i0:i1], pose.sin_h[i0:i1],
-                            pose.cos_h[i0:i1], pose.lateral[i0:i1], body, self.c,
-                            self.sigs[name], tp, self.sig_t0, self.fs_src, self.table, mode,
-                            r_t, gtab, g0, gdr, self.amps[name] * 10 ** (sc.ts_db / 20.0),
-                            sc.alpha, self.spec.waveforms[name].duration)
+            pw = pose.window(i0, i1)
+            for ir, it in self.path_pairs:
+                self._render_path(out, k0, i0, i1, t[i0:i1], pw, body, sc, tp, name, ir, it)
+
+    def _render_path(self, out: np.ndarray, k0: int, i0: int, i1: int, tw: np.ndarray,
+                     pw: PoseTrack, body: np.ndarray, sc: Scatterer, tp: float, name: str,
+                     ir: object, it: object) -> None:
+        """One echo path: transmit leg by image ``it`` of the projector, receive leg by image
+        ``ir`` of the scatterer (samples i0 … i1 of the chunk starting at k0)."""
+        tgt = ImageMover(sc.mover, ir)
+        proj = ImageMover(self.projector, it)
+        # expansion points on the absolute grid (exact there), interpolated
+        tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
+        ts_g = tg - retarded_time(self.own.state3(tg)[0], tg, tgt, self.c)
+        te_g = ts_g - retarded_time(sc.mover.state3(ts_g)[0], ts_g, proj, self.c)
+        ts = np.interp(tw, tg, ts_g)
+        te = np.interp(tw, tg, te_g)
+        tpos, tvel, tacc = tgt.state3(ts)
+        ppos, pvel, pacc = proj.state3(te)
+        w = np.ones(tw.size)
+        mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
+        echo_accumulate(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw, pw.rpos,
+                        pw.rdepth, pw.sin_h, pw.cos_h, pw.lateral, body, self.c,
+                        self.sigs[name], tp, self.sig_t0, self.fs_src, self.table, mode,
+                        r_t, gtab, g0, gdr,
+                        ir.coef * it.coef * self.amps[name] * 10 ** (sc.ts_db / 20.0),
+                        sc.alpha, self.spec.waveforms[name].duration, w, pw.epos,
+                        -ir.s * ir.a, ir.s, rough_exponent(self.multipath, ir, self.c),
+                        rough_exponent(self.multipath, it, self.c))

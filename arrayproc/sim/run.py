@@ -18,6 +18,13 @@ from arrayproc.io.recording import RecordingWriter
 from arrayproc.sim._propagate_kernels import oneway_accumulate
 from arrayproc.sim.active import ActiveSim, PingTrain
 from arrayproc.sim.motion import BodyOffsetMover, TrackMover
+from arrayproc.sim.multipath import (
+    ImageMover,
+    images,
+    path_sin_grazing,
+    rough_exponent,
+    roughness_factor,
+)
 from arrayproc.sim.noise import ambient_noise
 from arrayproc.sim.propagation import LossLaw, PoseTrack, grid_nodes, retarded_time
 from arrayproc.sim.scenario import Scenario, load_scenario
@@ -57,6 +64,7 @@ class Simulator:
                             + np.max(np.abs(self.lateral_offsets)))
         self.own = TrackMover(scen.ownship, arr.depth)
         self.loss = LossLaw(scen.propagation)
+        self.images = images(scen.propagation.multipath)
         self.table = default_table()
         # passive sources (and the tow ship)
         self.sources: list[tuple[object, SourceSignal | PingTrain, float]] = []
@@ -77,7 +85,8 @@ class Simulator:
         self.active = None
         if scen.active is not None:
             self.active = ActiveSim(scen.active, self.own, self.loss, self.c, self.fs,
-                                    self.fs_src, scen.duration, seed, self.extent, movers)
+                                    self.fs_src, scen.duration, seed, self.extent, movers,
+                                    scen.propagation.multipath)
             if scen.active.direct:
                 pt = PingTrain(self.active)
                 self.sources.append((pt.mover, pt, pt.depth))
@@ -134,17 +143,26 @@ class Simulator:
         # (the kernels solve each element's retarded time exactly from there)
         tg = grid_nodes(k0, k1, self.fs)
         ref_g = self.own.state3(tg)[0]
+        mp = self.s.propagation.multipath
+        ones = np.ones(n)
         for mover, sig, depth in self.sources:
-            tau = np.interp(t, tg, retarded_time(ref_g, tg, mover, self.c))
-            sp, sv, sa = mover.state3(t - tau)
-            m0 = int(np.floor((t[0] - tau.max() - margin) * self.fs_src)) - HALF_WIDTH - 2
-            m1 = int(np.ceil((t[-1] - tau.min() + margin) * self.fs_src)) + HALF_WIDTH + 3
+            paths = []  # per image path: reference retarded times, coefficient, roughness
+            for img in self.images:
+                im = ImageMover(mover, img)
+                tau = np.interp(t, tg, retarded_time(ref_g, tg, im, self.c))
+                paths.append((im, tau, img.coef, rough_exponent(mp, img, self.c)))
+            tmax = max(float(p[1].max()) for p in paths)
+            tmin = min(float(p[1].min()) for p in paths)
+            m0 = int(np.floor((t[0] - tmax - margin) * self.fs_src)) - HALF_WIDTH - 2
+            m1 = int(np.ceil((t[-1] - tmin + margin) * self.fs_src)) + HALF_WIDTH + 3
             buf = np.ascontiguousarray(sig.block(m0, m1))
             mode, r_t, gtab, g0, gdr = self.loss.kernel_args(depth, float(self.own.depth))
-            oneway_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
-                              pose.cos_h, pose.lateral, self.body, self.c, buf,
-                              m0 / self.fs_src, self.fs_src, self.table, mode, r_t, gtab, g0,
-                              gdr, 1.0)
+            for im, tau, coef, rough in paths:
+                sp, sv, sa = im.state3(t - tau)
+                oneway_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
+                                  pose.cos_h, pose.lateral, self.body, self.c, buf,
+                                  m0 / self.fs_src, self.fs_src, self.table, mode, r_t, gtab,
+                                  g0, gdr, coef, ones, pose.epos, rough)
         if self.active is not None:
             self.active.render(out, k0, t, pose, self.body)
         if self.noise is not None:
@@ -182,6 +200,10 @@ class Simulator:
                 spec_l = sig.spectral_level_db(tt)
                 d["broadband_level_db"] = spec_l
                 d["broadband_source_level_db"] = spec_l + 10 * np.log10(sig.bandwidth)
+            if self.s.propagation.multipath is not None:
+                d.update(self._path_truth(mover, sp.depth, tt))
+                a["path_surface_bounces"] = np.array([im.n_surface for im in self.images])
+                a["path_bottom_bounces"] = np.array([im.n_bottom for im in self.images])
             src[sp.name] = d
             attrs[f"sources/{sp.name}"] = a
         if src:
@@ -198,6 +220,19 @@ class Simulator:
             groups.update(act)
             attrs["pings"] = act_attrs
         return groups, attrs
+
+    def _path_truth(self, mover: object, depth: float, tt: np.ndarray) -> dict:
+        """Per image path at the array reference point: travel time (s) and signed amplitude
+        gain (reflections × roughness / path length, 1/m), columns in image order."""
+        ref = self.own.state3(tt)[0]
+        delay, amp = [], []
+        for img in self.images:
+            tau = retarded_time(ref, tt, ImageMover(mover, img), self.c)
+            sin_g = path_sin_grazing(img.depth(depth), ref[:, 2], self.c * tau)
+            rough = roughness_factor(self.s.propagation.multipath, img, sin_g, self.c)
+            delay.append(tau)
+            amp.append(img.coef * rough / np.maximum(self.c * tau, 1.0))
+        return {"path_delay_s": np.column_stack(delay), "path_amplitude": np.column_stack(amp)}
 
     def nav(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(time, position (n, 2), heading deg, depth) of the array reference point."""

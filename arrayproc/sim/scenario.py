@@ -104,12 +104,30 @@ class ArraySpec:
 
 
 @dataclass
+class MultipathSpec:
+    """``[propagation] multipath``: image sources in a flat waveguide (arrayproc.sim.multipath).
+
+    ``bottom_depth`` None: no bottom (surface image only); ``surface`` False: no surface
+    reflection (bottom image only). ``order``: most reflections on a path. The rough surface's
+    coherent reflection uses the Rayleigh parameter Γ = 2kσ sin θ at ``roughness_freq``.
+    """
+
+    surface: bool = True
+    bottom_depth: float | None = None  # m
+    bottom_loss_db: float = 0.0  # dB per bottom bounce
+    order: int = 1
+    surface_rms_height: float = 0.0  # m (σ)
+    roughness_freq: float = 0.0  # Hz (k = 2π f / c of the Rayleigh parameter)
+
+
+@dataclass
 class Propagation:
     loss: str = "spherical"  # spherical | cylindrical | table
     transition_range: float = 1.0
     table_range: np.ndarray | None = None  # m
     table_tl: np.ndarray | None = None  # dB, or a TLTable object resolved per depth pair
     table_path: str | None = None
+    multipath: MultipathSpec | None = None
 
 
 @dataclass
@@ -273,6 +291,47 @@ def _broadband(t: _Table | None, fs: float) -> Broadband | None:
     return Broadband((float(band[0]), float(band[1])), level, model, slope)
 
 
+def _multipath(pt: _Table, loss: str) -> MultipathSpec:
+    """The ``multipath = { … }`` inline table of ``[propagation]``."""
+    if not isinstance(pt.raw("multipath"), dict):
+        raise pt.err("multipath", "must be a table {surface, bottom_depth, bottom_loss_db, "
+                     f"order, …}}, got {pt.raw('multipath')!r}")
+    if loss != "spherical":
+        raise pt.err("multipath", f"image sources need loss = \"spherical\" (a {loss} law "
+                     "already stands for the boundaries' contribution)")
+    mt = pt.sub("multipath")
+    spec = MultipathSpec(mt.bool_("surface", True), mt.num("bottom_depth", None, positive=True),
+                         mt.num("bottom_loss_db", 0.0, nonneg=True), mt.int_("order", 1, minimum=0),
+                         mt.num("surface_rms_height", 0.0, nonneg=True),
+                         mt.num("roughness_freq", 0.0, nonneg=True))
+    if spec.surface_rms_height > 0 and spec.roughness_freq <= 0:
+        raise mt.err("roughness_freq", "required (> 0 Hz) with surface_rms_height > 0: the "
+                     "Rayleigh parameter 2kσ sin θ is evaluated at this frequency")
+    if spec.surface_rms_height > 0 and not spec.surface:
+        raise mt.err("surface_rms_height", "needs surface = true")
+    mt.done()
+    return spec
+
+
+def _check_waveguide(mp: MultipathSpec, array: ArraySpec, sources: list[SourceSpec],
+                     active: ActiveSpec | None, file: str) -> None:
+    """Every source, element, target and the projector lie in the water, 0 <= z <= D."""
+    d = mp.bottom_depth if mp.bottom_depth is not None else math.inf
+    where = [("[array] depth (elements)", array.depth + array.positions[:, 2])]
+    where += [(f"source {sp.name!r} depth", np.array([sp.depth])) for sp in sources]
+    if active is not None:
+        where += [(f"target {tg.name!r} depth", np.array([tg.depth])) for tg in active.targets]
+        where.append(("[active] offset (projector depth)",
+                      np.array([array.depth + active.offset[2]])))
+        if active.clutter is not None:
+            where.append(("[active.clutter] depth", np.array([active.clutter.depth])))
+    for what, z in where:
+        if np.any(z < 0) or np.any(z > d):
+            raise ConfigError(f"{file}: [propagation] multipath: {what} "
+                              f"{float(z.min()):g}…{float(z.max()):g} m is outside the water "
+                              f"(0 … {d:g} m)")
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file."""
     p = Path(path)
@@ -368,6 +427,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                     raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
                                  "and range_m must increase")
                 prop.table_range, prop.table_tl = r, tl
+        if pt.has("multipath"):
+            prop.multipath = _multipath(pt, prop.loss)
         pt.done()
 
     # noise (+ tow ship)
@@ -398,6 +459,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
 
     active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
     root.done()
+    if prop.multipath is not None:
+        _check_waveguide(prop.multipath, array, sources, active, file)
     return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
                     nav_interval, array, own, own_static, sources, prop, noise, active)
 
