@@ -118,12 +118,18 @@ class Simulator:
         p, _, _, crs, _ = self.own.evaluate(t)
         h = np.deg2rad(crs)
         idx = np.clip((t / self.s.array.lateral_snapshot).astype(np.int64), 0, self.n_snap - 1)
-        return PoseTrack(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
-                    np.sin(h), np.cos(h), np.ascontiguousarray(self.lateral_offsets[idx]))
+        lat = np.ascontiguousarray(self.lateral_offsets[idx])
+        pose = PoseTrack(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
+                         np.sin(h), np.cos(h), lat)
+        if self.s.array.shape == "water_pulled":
+            pose.epos = np.ascontiguousarray(self.own.threaded(t, self.body, lat))
+        return pose
 
     def element_positions(self, t: float) -> np.ndarray:
         """World positions (ch, 3) of the elements at time t (s), as the kernels build them."""
         ps = self.pose(np.array([float(t)]))
+        if ps.epos.shape[0]:
+            return ps.epos[0].copy()
         by = self.body[:, 1] + ps.lateral[0]
         x = ps.rpos[0, 0] + self.body[:, 0] * ps.sin_h[0] + by * ps.cos_h[0]
         y = ps.rpos[0, 1] + self.body[:, 0] * ps.cos_h[0] - by * ps.sin_h[0]
@@ -212,7 +218,12 @@ class Simulator:
         groups["array"] = {"positions": self.body, "nominal_positions": self.nominal,
                            "lateral_time": np.arange(self.n_snap) * arr.lateral_snapshot,
                            "lateral_offset": self.lateral_offsets}
-        attrs["array"] = {"position_error_std": arr.position_error_std,
+        if arr.shape == "water_pulled":  # the shape the elements took, at the truth times
+            lat = self.lateral_offsets[np.clip((tt / arr.lateral_snapshot).astype(np.int64),
+                                               0, self.n_snap - 1)]
+            groups["array"]["shape_time"] = tt
+            groups["array"]["element_positions"] = self.own.threaded(tt, self.body, lat)
+        attrs["array"] = {"shape": arr.shape, "position_error_std": arr.position_error_std,
                           "lateral_std": arr.lateral_std,
                           "lateral_snapshot": arr.lateral_snapshot, "depth": arr.depth}
         if self.active is not None:

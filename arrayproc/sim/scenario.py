@@ -101,6 +101,7 @@ class ArraySpec:
     position_error_std: float = 0.0
     lateral_std: float = 0.0
     lateral_snapshot: float = 1.0
+    shape: str = "rigid"  # "rigid" | "water_pulled" (elements thread the tow point's path)
 
 
 @dataclass
@@ -373,7 +374,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     array = ArraySpec(pos, at.num("depth", 0.0),
                       at.num("position_error_std", 0.0, nonneg=True),
                       at.num("lateral_std", 0.0, nonneg=True),
-                      at.num("lateral_snapshot", 1.0, positive=True))
+                      at.num("lateral_snapshot", 1.0, positive=True),
+                      at.str_("shape", "rigid", choices=("rigid", "water_pulled")))
     at.done()
 
     # ownship
@@ -384,6 +386,10 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         own, own_static = _trajectory(ot)
         _check_speed(ot, own, c)
         ot.done()
+    if array.shape == "water_pulled" and min(
+            [sg.speed for sg in own.segments] or [0.0]) <= 0:
+        raise at.err("shape", "water_pulled needs an ownship moving at speed > 0 on every "
+                     "leg (the elements follow the path the tow point took)")
 
     # sources
     sources: list[SourceSpec] = []
