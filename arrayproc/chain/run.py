@@ -35,7 +35,8 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     stop = recording.n_samples if t_stop is None else min(recording.n_samples,
                                                           int(round((t_stop + margin) * fs)))
     n = count_blocks(recording, spec.block, spec.block, start, stop)
-    source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop)
+    source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop,
+                                          array_shape=spec.array_shape)
     bar = None
     if progress:
         from tqdm import tqdm
