@@ -196,6 +196,12 @@ class Simulator:
                  "tonal_freqs": np.array([x.freq for x in sp.tonals], float),
                  "tonal_levels_db": np.array([x.level_db for x in sp.tonals], float),
                  "tonal_phases_deg": np.rad2deg(sig.phases)}
+            if any(x.drift_hz_per_s or x.unsteady for x in sp.tonals):
+                a["tonal_drift_hz_per_s"] = np.array([x.drift_hz_per_s for x in sp.tonals])
+                a["tonal_coherence_time"] = np.array([
+                    np.inf if x.coherence_time is None else x.coherence_time for x in sp.tonals])
+                a["tonal_fading_db"] = np.array([x.fading_db for x in sp.tonals])
+                a["tonal_fading_time"] = np.array([x.fading_time for x in sp.tonals])
             if sp.broadband is not None:
                 bb = sp.broadband
                 a["broadband_band"] = np.array(bb.band, float)

@@ -20,6 +20,7 @@ from arrayproc.dsp.fracdelay import PASSBAND
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.unsteady import NODE
 
 
 def _speed(t: _Table, required: bool = True) -> float | None:
@@ -73,6 +74,14 @@ class Tonal:
     freq: float  # Hz
     level_db: float  # dB re 1 µPa @ 1 m (RMS)
     phase_deg: float | None = None  # None: random (seeded)
+    drift_hz_per_s: float = 0.0  # linear frequency drift, f(t) = freq + drift·t
+    coherence_time: float | None = None  # s, random-walk phase (None: coherent)
+    fading_db: float = 0.0  # std of the log-amplitude fade, dB (0: steady)
+    fading_time: float = 10.0  # s, correlation time of the fade
+
+    @property
+    def unsteady(self) -> bool:
+        return self.coherence_time is not None or self.fading_db > 0
 
 
 @dataclass
@@ -269,7 +278,17 @@ def _tonals(t: _Table, fs: float) -> list[Tonal]:
         if f > PASSBAND * fs:
             raise tt.err("freq", f"{f} Hz is above the simulator's band "
                          f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-        out.append(Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None)))
+        ton = Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None),
+                    tt.num("drift_hz_per_s", 0.0), tt.num("coherence_time", None, positive=True),
+                    tt.num("fading_db", 0.0, nonneg=True),
+                    tt.num("fading_time", 10.0, positive=True))
+        node = NODE / (2.0 * fs)  # the processes' grid spacing (source rate 2·fs)
+        for key, v in (("coherence_time", ton.coherence_time), ("fading_time",
+                                                                  ton.fading_time)):
+            if v is not None and v < 50 * node and (key == "coherence_time" or ton.fading_db):
+                raise tt.err(key, f"{v:g} s is too short for the simulator's grid of "
+                             f"{node * 1e3:.2f} ms (at least {50 * node:.3g} s)")
+        out.append(ton)
         tt.done()
     return out
 
@@ -467,6 +486,13 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     root.done()
     if prop.multipath is not None:
         _check_waveguide(prop.multipath, array, sources, active, file)
+    for sp in sources:
+        for i, ton in enumerate(sp.tonals):
+            f_end = ton.freq + ton.drift_hz_per_s * duration
+            if ton.drift_hz_per_s and not (0 < f_end <= PASSBAND * fs):
+                raise ConfigError(f"{file}: source {sp.name!r} tonal {i}: drift_hz_per_s takes "
+                                  f"the tonal to {f_end:g} Hz by the end, outside (0, "
+                                  f"{PASSBAND * fs:g}] Hz")
     return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
                     nav_interval, array, own, own_static, sources, prop, noise, active)
 
