@@ -249,3 +249,8 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
                 if rough_t != 0.0:
                     g *= _rough(rough_t, ppos[k, 2] - tz, c * tau1)
                 out[k0 + k, ch] += scale * wamp[k] * g * interp_one(sig, u, table)
+
+
+#: The same echo kernel compiled serially: for short windows (reverberation scatterers, a few
+#: hundred samples on few channels) the parallel launch costs more than the work.
+echo_accumulate_serial = njit(cache=True, fastmath=True)(echo_accumulate.py_func)

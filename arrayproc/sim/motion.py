@@ -51,6 +51,11 @@ class TrackMover:
         acc[:, :2] = a2
         return pos, vel, acc, crs, rate
 
+    @property
+    def is_static(self) -> bool:
+        """Whether the point never moves or turns (speed and turn rate 0 throughout)."""
+        return bool(np.all(self._tab[3] == 0.0) and np.all(self._tab[4] == 0.0))
+
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.evaluate(t)[:3]
 
@@ -100,6 +105,8 @@ class TrackMover:
 class FixedMover:
     """A static point (x, y, z)."""
 
+    is_static = True
+
     def __init__(self, position: np.ndarray) -> None:
         self.position = np.asarray(position, dtype=float).reshape(3)
 
@@ -118,6 +125,10 @@ class BodyOffsetMover:
     def __init__(self, ownship: TrackMover, offset: np.ndarray) -> None:
         self.own = ownship
         self.offset = np.asarray(offset, dtype=float).reshape(3)
+
+    @property
+    def is_static(self) -> bool:
+        return self.own.is_static
 
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         p, v, a, crs, w = self.own.evaluate(t)

@@ -104,6 +104,10 @@ class ImageMover:
         self.mover = mover
         self.img = img
 
+    @property
+    def is_static(self) -> bool:
+        return bool(getattr(self.mover, "is_static", False))
+
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         p, v, a = self.mover.state3(t)
         if self.img is DIRECT:

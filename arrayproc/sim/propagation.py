@@ -49,6 +49,8 @@ def retarded_time(receiver: np.ndarray, t: np.ndarray, mover, c: float) -> np.nd
     Fixed-point iteration, a fixed number of times: the error shrinks by |v_S|/c per step
     (< 0.01), from ≤ τ·|v_S|/c, so 10 steps leave < 1e-15 s for ship speeds."""
     tau = np.linalg.norm(receiver - mover.state3(t)[0], axis=1) / c
+    if getattr(mover, "is_static", False):  # a fixed point: exact at once
+        return tau
     for _ in range(N_ITER):
         tau = np.linalg.norm(receiver - mover.state3(t - tau)[0], axis=1) / c
     return tau

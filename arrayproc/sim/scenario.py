@@ -154,6 +154,29 @@ class TargetSpec:
     ts_db: float
     distortion: float = 0.0  # s, thesis eq. (4.6) α
     source: str | None = None  # reuse a passive source's track
+    length: float = 0.0  # m: an extended target, highlights spread along its course
+    highlights: int = 1  # point scatterers along the length, TS split evenly
+
+
+@dataclass
+class ReverbSpec:
+    """Boundary reverberation: random Lambert scatterers on the bottom or the surface."""
+
+    boundary: str  # "bottom" | "surface"
+    depth: float  # m, the boundary's depth (0 for the surface)
+    strength_db: float  # Lambert parameter 10 log10 μ, dB (S = 10 log10 μ + 10 log10 sin θi sin θs)
+    density: float  # scatterers per m²
+    area: np.ndarray  # [xmin, xmax, ymin, ymax] m
+
+
+@dataclass
+class FeatureSpec:
+    """A bottom feature (ridge, wreck): static point scatterers at chosen positions."""
+
+    name: str
+    points: np.ndarray  # (n, 2) x, y m
+    depth: float
+    ts_db: float  # per point
 
 
 @dataclass
@@ -186,6 +209,8 @@ class ActiveSpec:
     targets: list[TargetSpec]
     clutter: ClutterSpec | None
     times: np.ndarray | None = None  # explicit transmission times, s
+    reverberation: list[ReverbSpec] = field(default_factory=list)
+    features: list[FeatureSpec] = field(default_factory=list)
 
     @property
     def waveform(self) -> Any:
@@ -345,6 +370,9 @@ def _check_waveguide(mp: MultipathSpec, array: ArraySpec, sources: list[SourceSp
                       np.array([array.depth + active.offset[2]])))
         if active.clutter is not None:
             where.append(("[active.clutter] depth", np.array([active.clutter.depth])))
+        where += [("[active.reverberation] depth", np.array([r.depth]))
+                  for r in active.reverberation]
+        where += [(f"feature {f.name!r} depth", np.array([f.depth])) for f in active.features]
     for what, z in where:
         if np.any(z < 0) or np.any(z > d):
             raise ConfigError(f"{file}: [propagation] multipath: {what} "
@@ -600,6 +628,55 @@ def _check_overlap(t: _Table, spec: ActiveSpec) -> None:
                     f"{dur[i]:g} s) lasts past the next ping ({t_next[i]:g} s later)")
 
 
+#: Most reverberation scatterers one scenario may ask for (each is rendered per ping).
+MAX_REVERB_SCATTERERS = 200_000
+
+
+def _reverb(t: _Table) -> ReverbSpec:
+    """One ``[[active.reverberation]]`` table."""
+    boundary = t.str_("boundary", "bottom", choices=("bottom", "surface"))
+    depth = (t.num("depth", required=True, positive=True) if boundary == "bottom"
+             else t.num("depth", 0.0))
+    if boundary == "surface" and depth != 0.0:
+        raise t.err("depth", "the surface is at depth 0")
+    area = t.vec("area", 4, required=True)
+    if not (area[0] < area[1] and area[2] < area[3]):
+        raise t.err("area", "must be [xmin, xmax, ymin, ymax] with min < max")
+    spec = ReverbSpec(boundary, depth, t.num("scattering_strength_db", required=True),
+                      t.num("density", required=True, positive=True), area)
+    n = spec.density * (area[1] - area[0]) * (area[3] - area[2])
+    if n > MAX_REVERB_SCATTERERS:
+        raise t.err("density", f"{n:.0f} scatterers over the area (at most "
+                    f"{MAX_REVERB_SCATTERERS}); lower the density or the area")
+    t.done()
+    return spec
+
+
+def _feature(t: _Table, i: int) -> FeatureSpec:
+    """One ``[[active.feature]]``: ``position = [x, y]`` (a wreck) or ``line = [[x0, y0],
+    [x1, y1]]`` with ``count`` points (a ridge)."""
+    name = t.str_("name", f"feature{i}")
+    _plain_name(t, "name", name, "the feature's scatterers")
+    if t.has("position") == t.has("line"):
+        raise t.err("position", "give position = [x, y] (a point) or line = [[x0, y0], "
+                    "[x1, y1]] with count (a ridge)")
+    if t.has("position"):
+        pts = t.vec("position", 2).reshape(1, 2)
+        if t.has("count"):
+            raise t.err("count", "only with line")
+    else:
+        ends = t.matrix("line", 2)
+        if ends.shape != (2, 2):
+            raise t.err("line", "must be two points [[x0, y0], [x1, y1]]")
+        n = t.int_("count", 10, minimum=1)
+        u = np.linspace(0.0, 1.0, n) if n > 1 else np.array([0.5])
+        pts = ends[0] + u[:, None] * (ends[1] - ends[0])
+    spec = FeatureSpec(name, pts, t.num("depth", required=True),
+                       t.num("ts_db", required=True))
+    t.done()
+    return spec
+
+
 def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
     level = _level(t, "level_db", required=True)
     several = t.has("waveforms") or t.has("times")
@@ -626,8 +703,10 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
             depth = tt.num("depth", 0.0)
         ts = tt.num("ts_db", required=True)
         alpha = tt.num("distortion_ms", 0.0, nonneg=True) * 1e-3
+        length = tt.num("length", 0.0, nonneg=True)
+        nh = tt.int_("highlights", 5 if length > 0 else 1, minimum=1)
         tt.done()
-        targets.append(TargetSpec(name, traj, depth, ts, alpha, src))
+        targets.append(TargetSpec(name, traj, depth, ts, alpha, src, length, nh))
     clutter = None
     ct = t.sub("clutter")
     if ct is not None:
@@ -638,9 +717,11 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
                               ct.num("depth", 0.0), ct.num("ts_mean_db", -10.0),
                               ct.num("ts_std_db", 5.0, nonneg=True))
         ct.done()
+    reverb = [_reverb(rt) for rt in t.subs("reverberation")]
+    features = [_feature(ft, i) for i, ft in enumerate(t.subs("feature"))]
     t.done()
     spec = ActiveSpec(waves, levels, sched, level, interval, first, count, offset, direct,
-                      targets, clutter, times)
+                      targets, clutter, times, reverb, features)
     if several:
         _check_overlap(t, spec)
     return spec
