@@ -15,8 +15,9 @@ import numpy as np
 from arrayproc.dsp.fracdelay import HALF_WIDTH, OVERSAMPLING, default_table
 from arrayproc.errors import ConfigError
 from arrayproc.io.recording import RecordingWriter
-from arrayproc.sim._propagate_kernels import oneway_accumulate
+from arrayproc.sim._propagate_kernels import oneway_accumulate, table_accumulate
 from arrayproc.sim.active import ActiveSim, PingTrain
+from arrayproc.sim.bellhop_paths import FamilyPaths, hilbert_fir, quadrature, reference_delay
 from arrayproc.sim.motion import BodyOffsetMover, TrackMover
 from arrayproc.sim.multipath import (
     ImageMover,
@@ -80,6 +81,12 @@ class Simulator:
                 mover = TrackMover(sp.traj, sp.depth)
                 movers[sp.name] = mover
             self.sources.append((mover, SourceSignal(sp, mover, self.fs_src, seed, i), sp.depth))
+        self.bellhop = None  # source depth -> BELLHOP ray families
+        if scen.propagation.bellhop is not None:
+            self.bellhop = {float(d): FamilyPaths(scen.propagation.bellhop, self.c, float(d),
+                                                  float(arr.depth))
+                            for d in sorted({float(x[2]) for x in self.sources})}
+            self._hilbert = hilbert_fir()
         self.noise = (ambient_noise(scen.noise, self.fs, self.n_channels, seed)
                       if scen.noise is not None else None)
         self.active = None
@@ -152,6 +159,9 @@ class Simulator:
         mp = self.s.propagation.multipath
         ones = np.ones(n)
         for mover, sig, depth in self.sources:
+            if self.bellhop is not None:
+                self._render_bellhop(out, t, tg, ref_g, pose, mover, sig, depth, margin)
+                continue
             paths = []  # per image path: reference retarded times, coefficient, roughness
             for img in self.images:
                 im = ImageMover(mover, img)
@@ -174,6 +184,27 @@ class Simulator:
         if self.noise is not None:
             out += self.noise.block(k0, k1)
         return out
+
+    def _render_bellhop(self, out: np.ndarray, t: np.ndarray, tg: np.ndarray,
+                        ref_g: np.ndarray, pose: PoseTrack, mover: object, sig: object,
+                        depth: float, margin: float) -> None:
+        """One source's field as the sum of its BELLHOP ray families."""
+        fam = self.bellhop[float(depth)]
+        paths = []
+        for i in range(len(fam.tables)):
+            tau = np.interp(t, tg, reference_delay(fam, i, ref_g[:, :2], tg, mover))
+            paths.append((i, tau))
+        tmax = max(float(p[1].max()) for p in paths)
+        tmin = min(float(p[1].min()) for p in paths)
+        m0 = int(np.floor((t[0] - tmax - margin) * self.fs_src)) - HALF_WIDTH - 2
+        m1 = int(np.ceil((t[-1] - tmin + margin) * self.fs_src)) + HALF_WIDTH + 3
+        buf, bufq = quadrature(sig.block, m0, m1, self._hilbert)
+        for i, tau in paths:
+            sp, sv, sa = mover.state3(t - tau)
+            table_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
+                             pose.cos_h, pose.lateral, self.body, pose.epos, buf, bufq,
+                             m0 / self.fs_src, self.fs_src, self.table, fam.tables[i],
+                             fam.r0, fam.dr, 1.0)
 
     # -- truth -----------------------------------------------------------------------------
     def truth(self) -> tuple[dict, dict]:

@@ -131,6 +131,22 @@ class MultipathSpec:
 
 
 @dataclass
+class BellhopSpec:
+    """``multipath = "bellhop"`` with ``[propagation.bellhop]``: a range-independent
+    environment whose BELLHOP arrivals are the propagation paths."""
+
+    depth: float  # m, flat bottom
+    freq: float  # Hz, frequency of the ray trace (amplitudes and phases)
+    max_range: float  # m
+    range_step: float = 10.0  # m
+    ssp: np.ndarray | None = None  # (n, 2) depth m, speed m/s; None: isovelocity
+    bottom_speed: float = 1600.0
+    bottom_density: float = 1.8  # g/cm³
+    bottom_atten: float = 0.5  # dB/λ
+    n_beams: int = 0  # 0: BELLHOP chooses
+
+
+@dataclass
 class Propagation:
     loss: str = "spherical"  # spherical | cylindrical | table
     transition_range: float = 1.0
@@ -138,6 +154,7 @@ class Propagation:
     table_tl: np.ndarray | None = None  # dB, or a TLTable object resolved per depth pair
     table_path: str | None = None
     multipath: MultipathSpec | None = None
+    bellhop: BellhopSpec | None = None
 
 
 @dataclass
@@ -358,6 +375,30 @@ def _multipath(pt: _Table, loss: str) -> MultipathSpec:
     return spec
 
 
+def _bellhop(pt: _Table, loss: str, c: float) -> BellhopSpec:
+    """``multipath = "bellhop"`` and its ``[propagation.bellhop]`` environment."""
+    if loss != "spherical":
+        raise pt.err("multipath", f"BELLHOP arrivals replace the loss law; leave loss = "
+                     f"\"spherical\" (got {loss!r})")
+    bt = pt.sub("bellhop", required=True)
+    ssp = bt.matrix("ssp", 2)
+    spec = BellhopSpec(bt.num("depth", required=True, positive=True),
+                       bt.num("freq", required=True, positive=True),
+                       bt.num("max_range", required=True, positive=True),
+                       bt.num("range_step", 10.0, positive=True), ssp,
+                       bt.num("bottom_speed", 1600.0, positive=True),
+                       bt.num("bottom_density", 1.8, positive=True),
+                       bt.num("bottom_atten", 0.5, nonneg=True),
+                       bt.int_("n_beams", 0, minimum=0))
+    if ssp is not None and (np.any(np.diff(ssp[:, 0]) <= 0) or ssp[0, 0] != 0.0
+                            or ssp[-1, 0] != spec.depth):
+        raise bt.err("ssp", "depths must increase from 0 to the bottom depth")
+    if spec.max_range / spec.range_step > 20000:
+        raise bt.err("range_step", "more than 20000 ranges; use a coarser step")
+    bt.done()
+    return spec
+
+
 def _check_waveguide(mp: MultipathSpec, array: ArraySpec, sources: list[SourceSpec],
                      active: ActiveSpec | None, file: str) -> None:
     """Every source, element, target and the projector lie in the water, 0 <= z <= D."""
@@ -480,8 +521,12 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                     raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
                                  "and range_m must increase")
                 prop.table_range, prop.table_tl = r, tl
-        if pt.has("multipath"):
+        if pt.has("multipath") and pt.raw("multipath") == "bellhop":
+            prop.bellhop = _bellhop(pt, prop.loss, c)
+        elif pt.has("multipath"):
             prop.multipath = _multipath(pt, prop.loss)
+        if pt.has("bellhop") and prop.bellhop is None:
+            raise pt.err("bellhop", "only with multipath = \"bellhop\"")
         pt.done()
 
     # noise (+ tow ship)
@@ -514,6 +559,12 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     root.done()
     if prop.multipath is not None:
         _check_waveguide(prop.multipath, array, sources, active, file)
+    if prop.bellhop is not None:
+        if active is not None:
+            raise ConfigError(f"{file}: [propagation] multipath = \"bellhop\" is for passive "
+                              "sources only (active echoes: use the image-source table)")
+        _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
+                         None, file)
     for sp in sources:
         for i, ton in enumerate(sp.tonals):
             f_end = ton.freq + ton.drift_hz_per_s * duration
