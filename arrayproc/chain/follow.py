@@ -27,7 +27,7 @@ import numpy as np
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.chain.graph import ChainSpec, compose, drive, set_rates
-from arrayproc.chain.stage import RunContext
+from arrayproc.chain.run import bind_chain
 from arrayproc.io.atomic import stop_requested
 
 
@@ -116,11 +116,7 @@ def follow_chain(recording: Any, spec: ChainSpec, products: Any = None, idle_s: 
     log : callable, optional
         Where the stages' warnings go.
     """
-    ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
-    if log is not None:
-        ctx.log = log
-    for s in spec.stages:
-        s.bind(ctx)
+    bind_chain(recording, spec, products, log)
     set_rates(spec, recording.fs)
     stats = FollowStats()
     flush = products.flush if products is not None else (lambda: None)
