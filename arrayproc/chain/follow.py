@@ -11,10 +11,12 @@ the samples in the file then are read to the end, the last block zero-padded exa
 :func:`arrayproc.chain.reader.read_blocks` pads it, so the products are those of a run on the
 file as it stands at the end.
 
-The recording's ``growing`` attribute is True until the stream's end is decided: a stage
-whose work depends on the recording's final length (``active_beams``: the last ping's receive
-window runs to the end) reads it. The latency of each block is measured from the poll that
-first saw its last sample to the flush after it went through the chain
+A growing ``/nav`` (a towed array's track written with the samples) is re-read as it grows,
+and a block waits until the track reaches its last sample, so the poses are those of the
+whole-file run. The recording's ``growing`` attribute is True until the stream's end is
+decided: a stage whose work depends on the recording's final length (``active_beams``: the
+last ping's receive window runs to the end) reads it. The latency of each block is measured
+from the poll that first saw its last sample to the flush after it went through the chain
 (:class:`FollowStats`).
 """
 
@@ -78,6 +80,11 @@ def follow_blocks(recording: Any, nfft: int, idle_s: float, poll_s: float,
             ending = True
             stats.reason = f"no new samples for {idle_s:g} s"
         full = n // nfft
+        # a block waits for the navigation to reach its end too (a towed array's /nav grows
+        # with the samples): its poses are then those of the whole-file run
+        nav_end = recording.nav_end() if hasattr(recording, "nav_end") else float("inf")
+        if not ending and np.isfinite(nav_end):
+            full = min(full, max(k, int(np.floor(nav_end * fs)) // nfft))
         if ending:
             recording.growing = False  # n is the final length from here on
         if ending and n > k * nfft:
