@@ -581,10 +581,13 @@ def _run_process(args: argparse.Namespace) -> int:
     from arrayproc.app.resources import parse_bytes
     check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    if args.idle is not None and not args.follow:
+        raise ConfigError("--idle needs --follow")
     stats: list = []
     n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
                 nan=args.nan, progress=progress_wanted(args) and not args.follow,
-                max_memory=limit, follow=args.follow, idle_s=args.idle, stats=stats)
+                max_memory=limit, follow=args.follow,
+                idle_s=10.0 if args.idle is None else args.idle, stats=stats)
     if not args.quiet:
         print(f"{args.output}: {n} blocks processed")
         if stats:
@@ -661,7 +664,7 @@ def add_parser(sub: Any) -> None:
                    help="the recording is still being written (HDF5 SWMR): process each "
                         "block as it completes, write the products live, stop after --idle "
                         "seconds without new samples or at a signal")
-    s.add_argument("--idle", type=float, default=10.0, metavar="S",
+    s.add_argument("--idle", type=float, default=None, metavar="S",
                    help="with --follow: stop after S seconds without new samples (default 10)")
     s.set_defaults(func=_run_process)
 

@@ -157,16 +157,18 @@ def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
     assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
 
 
-@pytest.mark.parametrize("idle", ["0", "-1", "nan"])
-def test_follow_refuses_bad_idle(tmp_path, idle):
+@pytest.mark.parametrize("args", [["--follow", "--idle", "0"], ["--follow", "--idle", "-1"],
+                                  ["--follow", "--idle", "nan"], ["--idle", "5"]])
+def test_follow_refuses_bad_idle(tmp_path, args):
     chain = _chain(tmp_path)
     rec = tmp_path / "r.h5"
     from tests.conftest import write_recording
     write_recording(rec, np.zeros((2000, 8), np.float32))
     p = subprocess.run([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
-                        str(chain), "-o", str(tmp_path / "o.h5"), "--follow", "--idle", idle],
+                        str(chain), "-o", str(tmp_path / "o.h5"), *args],
                        capture_output=True, text=True, env=ENV, cwd=REPO)
     assert p.returncode == 2 and p.stderr.startswith("arrayproc: error: --idle")
+    assert len(p.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "o.h5").exists()
 
 
