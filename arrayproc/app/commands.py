@@ -589,10 +589,13 @@ def _run_process(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    if args.idle is not None and not args.follow:
+        raise ConfigError("--idle needs --follow")
     stats: list = []
     n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
                 nan=args.nan, progress=bar_wanted(args) and not args.follow,
-                max_memory=limit, follow=args.follow, idle_s=args.idle, stats=stats)
+                max_memory=limit, follow=args.follow,
+                idle_s=10.0 if args.idle is None else args.idle, stats=stats)
     if stats and not args.quiet:
         print(latency_line(stats[0]))
     done(args.output, f"{products_what(args.output)}, {n} block{'s' * (n != 1)}",
@@ -700,7 +703,7 @@ def add_parser(sub: Any) -> None:
                    help="the recording is still being written (HDF5 SWMR): process each "
                         "block as it completes, write the products live, stop after --idle "
                         "seconds without new samples or at a signal")
-    s.add_argument("--idle", type=float, default=10.0, metavar="S",
+    s.add_argument("--idle", type=float, default=None, metavar="S",
                    help="with --follow: stop after S seconds without new samples (default 10)")
     s.set_defaults(func=_run_process)
 

@@ -133,7 +133,8 @@ class MatchedFilter(Stage):
                                      cm.insensitive(wf.kind))
             except ConfigError as e:
                 raise ConfigError(f"stage {self.name!r}: {e}") from None
-            bank = replica_spectra(wf.samples, wf.fs, f0, df, n, doppler_scale(rr, c))
+            bank = replica_spectra(wf.samples, wf.fs, f0, df, n, doppler_scale(rr, c),
+                                   map_fn=lambda f, items: self._map(f, list(items)))
             self._banks[key] = (rr, bank)
         return self._banks[key]
 

@@ -41,6 +41,8 @@ from . import _common as cm
 from .bank import band_plan
 from .beamform import beam_axis, beam_series, element_advances
 
+_UNKNOWN = 1 << 62  # a window whose end is not known yet (a recording still growing)
+
 
 @register
 class ActiveBeams(Stage):
@@ -82,21 +84,26 @@ class ActiveBeams(Stage):
     def _workers(self) -> int:
         return self.threads if self.threads > 0 else (os.cpu_count() or 1)
 
-    def _window(self, act, i: int, fs: float, n_total: int) -> tuple[int, int, int]:
-        """(first sample, samples to transform, complete lags) of ping i."""
+    def _window(self, act, i: int, fs: float, n_total: int | None) -> tuple[int, int, int]:
+        """(first sample, samples to transform, complete lags) of ping i; ``n_total`` None
+        while the recording still grows (``process --follow``): the window the schedule
+        gives, and for the last ping of a window up to the recording's end, none yet."""
         tp = float(act.time[i])
         wf = act.waveforms[act.waveform[i]]
+        s0 = int(round(tp * fs))
+        n_pulse = int(np.ceil(wf.duration * fs)) + 1
         if self.window_s > 0:
             span = self.window_s
         elif i + 1 < act.time.size:
             span = float(act.time[i + 1]) - tp
+        elif n_total is None:
+            return s0, _UNKNOWN, _UNKNOWN
         else:
             span = n_total / fs - tp
-        s0 = int(round(tp * fs))
-        n_pulse = int(np.ceil(wf.duration * fs)) + 1
         n_lag = max(1, int(round(span * fs)))
         # lags whose whole echo lies inside the recording
-        n_lag = max(1, min(n_lag, n_total - s0 - n_pulse))
+        if n_total is not None:
+            n_lag = max(1, min(n_lag, n_total - s0 - n_pulse))
         return s0, n_lag + n_pulse, n_lag
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -105,7 +112,10 @@ class ActiveBeams(Stage):
         act = cm.schedule(rec, where)
         c = self.ctx.sound_speed
         fs = rec.fs
-        n_total = rec.n_samples
+        # a recording still being written (process --follow) says so with ``growing``: the
+        # pings whose windows are complete go as they complete, the others when it stops
+        growing = bool(getattr(rec, "growing", False))
+        n_total = None if growing else rec.n_samples
         wins = [self._window(act, i, fs, n_total) for i in range(act.time.size)]
         self._blank_wf = blanked_waveforms(self._blank, act.waveforms, where,
                                            getattr(rec, "path", ""))
@@ -118,6 +128,9 @@ class ActiveBeams(Stage):
         nxt = 0  # next ping to emit
         positions = None
         for b in blocks:
+            if growing and not getattr(rec, "growing", False):  # its final length is known
+                growing, n_total = False, rec.n_samples
+                wins[nxt:] = [self._window(act, i, fs, n_total) for i in range(nxt, len(wins))]
             x = b.data[: b.meta.n_valid]
             s0 = int(b.meta.sample0)
             positions = b.positions
@@ -127,7 +140,7 @@ class ActiveBeams(Stage):
                 buf = np.concatenate([buf, x])
             end = buf_start + buf.shape[0]
             while nxt < len(wins) and (wins[nxt][0] + wins[nxt][1] <= end
-                                       or end >= n_total):
+                                       or (n_total is not None and end >= n_total)):
                 yield self._ping(act, nxt, wins[nxt], buf, buf_start, plans, positions, fs, c)
                 nxt += 1
             keep = wins[nxt][0] if nxt < len(wins) else end
