@@ -126,6 +126,11 @@ class CovarianceStage(Stage):
                 freqs=freqs, beams=self.beam_axis, index=index, meta=meta)
             index += 1
 
+    def segment_grid(self, fs: float, n_channels: int) -> int:
+        """Segment reads start on the covariance groups' grid (input samples), so a segment
+        forms the groups of a single run (chain.segments)."""
+        return int(self.snapshots * self.hop)
+
     def warmup_seconds(self, fs: float) -> float:
         return (self.snapshots * self.hop + self.nfft) / fs
 

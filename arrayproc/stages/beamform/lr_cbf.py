@@ -232,6 +232,12 @@ class LRCBF(Stage):
             yield b.replace(beams=self.beam_axis,
                             meta=dataclasses.replace(b.meta, beam_mode="lr"))
 
+    def segment_grid(self, fs: float, n_channels: int) -> int:
+        """Segment reads on the adaptive covariance groups' grid, or on the frames' hop."""
+        if self._mvdr is not None:
+            return self._mvdr.segment_grid(fs, n_channels)
+        return int(self.hop)
+
     def warmup_seconds(self, fs: float) -> float:
         if self._mvdr is not None:
             return self._mvdr.warmup_seconds(fs)
