@@ -14,7 +14,6 @@ groups), ``btr``, ``lofar`` and ``bearings`` follow unchanged.
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -23,11 +22,9 @@ from arrayproc.chain import Param, Stage, positive
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, Integration, SnapshotMeta
 from arrayproc.dsp import workers
-from arrayproc.errors import ConfigError
-from arrayproc.geo.beams import beam_directions
 from arrayproc.stages.beamform._covariance import CovarianceGroup, covariance_groups
 from arrayproc.stages.beamform._steering import Steering
-from arrayproc.stages.beamform.cbf import WINDOWS
+from arrayproc.stages.beamform.cbf import WINDOWS, check_frame_keys
 
 COMMON = {
     "nfft": Param("int", 1024, "samples per snapshot (DFT length)", check=positive),
@@ -51,22 +48,7 @@ class CovarianceStage(Stage):
     produces = Domain.POWER
 
     def validate(self) -> None:
-        w = f"stage {self.name!r}"
-        if self.hop == 0:
-            self.hop = max(1, self.nfft // 2)
-        if self.hop < 0:
-            raise ConfigError(f"{w}: key 'hop' must be > 0, got {self.hop}")
-        if self.hop > self.nfft:
-            warnings.warn(f"{w}: key 'hop' ({self.hop}) exceeds 'nfft' ({self.nfft}): each "
-                          f"snapshot skips {self.hop - self.nfft} samples", stacklevel=2)
-        if self.threads < 0:
-            raise ConfigError(f"{w}: key 'threads' must be >= 0, got {self.threads}")
-        if self.band is not None and self.band[0] < 0:
-            raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {self.band}")
-        try:
-            self.beam_axis, self._dirs, self.beam_mode = beam_directions(self.beams)
-        except ConfigError as e:
-            raise ConfigError(f"{w}: {e}") from None
+        check_frame_keys(self)
         self._key = None
 
     # -- per stream set-up ---------------------------------------------------------------
