@@ -44,14 +44,11 @@ from arrayproc.dsp.windows import time_taper
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.mvdr import MVDR
 
-FS = 5120.0
-N_CH = 64
-NFFT = 2048
-HOP = 1024
-BAND = (100.0, 2000.0)
-BEAMS = {"start": 0.0, "stop": 180.0, "count": 181}
-C = 1500.0
+# the CBF benchmark's configuration (issue 4): same data, same beams
+FS, N_CH, NFFT, HOP = bench_cbf.FS, bench_cbf.N_CH, bench_cbf.NFFT, bench_cbf.HOP
+BAND, BEAMS, C = bench_cbf.BAND, bench_cbf.BEAMS, bench_cbf.C
 LOADING = 0.01
+
 
 def source(seconds: float, positions: np.ndarray):
     """The CBF benchmark's white-noise time blocks (scripts/bench_cbf.py) at ``positions``."""
