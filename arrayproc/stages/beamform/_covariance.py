@@ -128,7 +128,7 @@ def accumulate(acc: np.ndarray, x: np.ndarray, threads: int = 1) -> None:
 
     # always on the pool's workers, even one: they run single-threaded BLAS, where OpenBLAS's
     # own threads in the calling thread cost 10x the CPU time on a loaded machine (measured)
-    n_thr = max(1, min(threads, nf // 16))
+    n_thr = max(1, min(threads, nf // 64))  # as _covstage.BINS_PER_THREAD
     edges = [nf * k // n_thr for k in range(n_thr + 1)]
     list(workers.pool(n_thr).map(run, [slice(edges[k], edges[k + 1]) for k in range(n_thr)]))
 
