@@ -3,7 +3,7 @@
 
 Per bin f the sample covariance of ``K`` consecutive snapshots (the ``snapshots`` key),
 
-    R̂(f) = (1/K) Σ_k x_k(f) x_k(f)^H,                                   (Van Trees 7.8)
+    R̂(f) = (1/K) Σ_k x_k(f) x_k(f)^H,
 
 x_k the element DFTs of snapshot k (unnormalised, numpy sign convention, as :mod:`cbf`), so a
 plane wave of DFT amplitude s gives R̂ = |s|² a a^H with a_n = exp(+j2πf τ_n). Groups of K
@@ -53,7 +53,7 @@ def _circ_mean_deg(a: np.ndarray) -> float:
 def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nfft: int,
                       hop: int, window: str, band: tuple[float, float] | None,
                       threads: int = 1) -> Iterator[CovarianceGroup]:
-    """The sample covariance (Van Trees eq. 7.8) of every complete group of ``snapshots``
+    """The sample covariance of every complete group of ``snapshots``
     snapshots of the stage's input (time blocks, framed here, or element-spectra blocks).
 
     A group's spectra are kept (K·F·C complex64, e.g. 25 MB for 64 snapshots of 761 bins and
@@ -162,14 +162,14 @@ def exchange(positions: np.ndarray, tol: float = 1e-6) -> np.ndarray | None:
 
 
 def forward_backward(r: np.ndarray, perm: np.ndarray) -> np.ndarray:
-    """Forward-backward average R_fb = ½ (R + J R* J) (Van Trees eq. 7.331, Pillai 1989): for a
+    """Forward-backward average R_fb = ½ (R + J R* J) (Pillai 1989): for a
     centro-symmetric array J a* = a (phase centre at the centroid), so every plane-wave term is
     kept and the cross terms of coherent sources are decorrelated."""
     return 0.5 * (r + r[..., perm[:, None], perm[None, :]].conj())
 
 
 def spatial_smoothing(r: np.ndarray, order: np.ndarray, subarrays: int) -> np.ndarray:
-    """Forward spatial smoothing (Shan, Wax & Kailath 1985, eq. 7): the mean of the covariances
+    """Forward spatial smoothing (Shan, Wax & Kailath 1985): the mean of the covariances
     of ``subarrays`` overlapping subarrays of L = C − subarrays + 1 consecutive elements of a
     uniform line array (``order``: channels from the forward end aft). Returns (F, L, L) in the
     element order of ``order``; M coherent sources need subarrays ≥ M (and L > M)."""
