@@ -8,7 +8,7 @@ Parts (``--parts``, comma separated; all by default):
   fraction of estimates in which MVDR (default loading), MUSIC (2 sources) and CBF show both
   peaks each within 0.3° of the truth, per element SNR −10 … 20 dB; the SNR at which half are
   resolved against the closed form for MVDR with the exact covariance (Woodbury; midpoint
-  criterion of Cox 1973: P(mid) < ½ (P(θ1) + P(θ2)) of the band-summed spectrum);
+  criterion: P(mid) < ½ (P(θ1) + P(θ2)) of the band-summed spectrum);
 - ``wng``: MVDR white-noise gain and array gain against loading for an exact covariance (20 dB
   interferer 1.5° from the look, inside the main lobe) from the stage, against
   Sherman-Morrison; robustness to element position errors σ = 0.05 λ (at 900 Hz): the level
