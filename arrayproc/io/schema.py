@@ -213,6 +213,9 @@ _KINDS = [
         "speed_mps": _c("m/s", "target speed"),
         "range_sigma_m": _c("m", "range standard deviation from the CRLB (eq. 3.55)", False),
         "cost_mirror": _c("", "cost of the mirrored side hypothesis", False),
+        "preferred": _c("", "1: the solution the data prefer; 0: its mirror (sides flipped), "
+                        "written while the manoeuvre has not resolved the side", False,
+                        dtype="i1"),
     }),
 ]
 
