@@ -303,3 +303,46 @@ def td_model_jacobian(state: np.ndarray, tau: np.ndarray, elem_x: np.ndarray,
             jac[b, n, 2] = tb * jx
             jac[b, n, 3] = tb * jy
     return h, jac
+
+
+@njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
+def bf_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
+                       angle: np.ndarray, heading: np.ndarray, cone_mode: bool,
+                       w_angle: np.ndarray, freq: np.ndarray, w_freq: np.ndarray,
+                       inv_c: float) -> np.ndarray:
+    """Bearings + frequency cost for each state of a population, the rest frequency profiled.
+
+    Angle terms as :func:`bo_cost_population` (``cone_mode`` False: bearings ``angle``) or
+    :func:`cone_cost_population` (True: cone angles on headings ``heading``). Frequency terms
+    ``Σ_b (w_b (f_b − f0 g_b(x)))²`` with the Doppler factor ``g_b = 1 − ṙ_b / c`` (``ṙ`` the
+    range rate, opening positive, from the source's and the observer's velocities
+    ``obs_vel`` (B, 2) m/s) and, for each state, the least-squares rest frequency
+    ``f0 = Σ w² g f / Σ w² g²`` (the cost is quadratic in ``f0``). Returns (P,).
+    """
+    n_pop = pop.shape[1]
+    out = np.empty(n_pop)
+    for p in prange(n_pop):
+        vx = pop[2, p]
+        vy = pop[3, p]
+        s = 0.0
+        sgg = 0.0
+        sgf = 0.0
+        sff = 0.0
+        for b in range(tau.size):
+            dx, dy = _source_offset(pop[0, p], pop[1, p], vx, vy, tau[b], obs[b, 0],
+                                    obs[b, 1], 0.0)
+            brg = atan2(dx, dy)
+            if cone_mode:
+                r = (angle[b] - abs(wrap_pi(brg - heading[b]))) * w_angle[b]
+            else:
+                r = wrap_pi(angle[b] - brg) * w_angle[b]
+            s += r * r
+            rng = np.sqrt(dx * dx + dy * dy)
+            rdot = (dx * (vx - obs_vel[b, 0]) + dy * (vy - obs_vel[b, 1])) / rng
+            g = 1.0 - rdot * inv_c
+            w2 = w_freq[b] * w_freq[b]
+            sgg += w2 * g * g
+            sgf += w2 * g * freq[b]
+            sff += w2 * freq[b] * freq[b]
+        out[p] = s + sff - sgf * sgf / sgg
+    return out

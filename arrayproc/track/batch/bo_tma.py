@@ -29,8 +29,8 @@ from .fim import bo_fim, bo_jacobian
 from .motion import emission_points, static_cone
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
 
-__all__ = ["reject_outliers", "bearing_model", "cone_model", "solve_bearings", "solve_cone",
-           "solve_line_bearings"]
+__all__ = ["reject_outliers", "bearing_model", "cone_model", "end_side_searches",
+           "solve_bearings", "solve_cone", "solve_line_bearings"]
 
 #: ``cone`` (and its older name ``auto``): the side may change from row to row (:func:`solve_cone`)
 SIDES = ("cone", "auto", "port", "starboard")
@@ -225,6 +225,21 @@ def _cone_setup(t: np.ndarray, cone: np.ndarray, heading: np.ndarray, obs: np.nd
     return t, cone, heading, obs, t0, t1, n_rej, w
 
 
+def end_side_searches(t: np.ndarray, cone: np.ndarray, heading: np.ndarray, t0: float,
+                      t1: float, o0: np.ndarray, o1: np.ndarray, min_range_m: float,
+                      max_range_m: float) -> dict[tuple[str, str], PolarSearch]:
+    """One global search box per pair of mirror sides (start, end) of a line array's cone
+    angles: the bearings ``ψ ∓ θ`` of each side extrapolated to the window's ends."""
+    out = {}
+    for s0 in ("starboard", "port"):
+        for s1 in ("starboard", "port"):
+            (b0, e0) = end_value(t, heading + _SIGN[s0] * cone, t0)
+            (b1, e1) = end_value(t, heading + _SIGN[s1] * cone, t1)
+            out[(s0, s1)] = PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * e0, 10 * e1),
+                                        min_range_m, max_range_m, t1 - t0, o0, o1)
+    return out
+
+
 def solve_cone(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
                observer_xy: np.ndarray, sigma_rad: float | None = None, *,
                t0: float | None = None, t1: float | None = None, min_range_m: float = 50.0,
@@ -284,16 +299,11 @@ maxiter, retarded_c
         return -(w * sign)[:, None] * bo_jacobian(x, tau, obs, cr)
 
     found = {}
-    for s0 in ("starboard", "port"):
-        for s1 in ("starboard", "port"):
-            y0, y1 = hd + _SIGN[s0] * cone, hd + _SIGN[s1] * cone
-            (b0, e0), (b1, e1) = end_value(t, y0, t0), end_value(t, y1, t1)
-            search = PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * e0, 10 * e1), min_range_m,
-                                 max_range_m, t1 - t0, o0, o1)
-            x = global_then_local(
-                lambda p: cone_cost_population(p, tau, obs, cone, hd, w, inv_c), res, jac,
-                search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
-            found[(s0, s1)] = x
+    for sides, search in end_side_searches(t, cone, hd, t0, t1, o0, o1, min_range_m,
+                                           max_range_m).items():
+        found[sides] = global_then_local(
+            lambda p: cone_cost_population(p, tau, obs, cone, hd, w, inv_c), res, jac,
+            search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
     rss = {k: float(np.sum((res(x) / w) ** 2)) for k, x in found.items()}
     best = min(rss, key=rss.get)
     flip = {"port": "starboard", "starboard": "port"}

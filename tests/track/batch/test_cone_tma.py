@@ -11,28 +11,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from arrayproc.track.batch import scenarios as S
 from arrayproc.track.batch.bo_tma import bearing_model, cone_model, solve_cone, solve_line_bearings
 from arrayproc.track.batch.fim import bo_jacobian
 
 SIGMA = np.deg2rad(0.5)
-KNOT = 1852.0 / 3600.0
-SOURCE = np.array([3600.0 * np.sin(np.deg2rad(25.0)), 3600.0 * np.cos(np.deg2rad(25.0)),
-                   3.0 * np.sin(np.deg2rad(300.0)), 3.0 * np.cos(np.deg2rad(300.0))])
+SOURCE = S.ENDFIRE_SOURCE
 
 
 def _wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-def turning_ownship(n: int = 126, dt: float = 5.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Times (s), headings (rad) and positions (m) of the ownship, integrated at 0.1 s."""
-    fine = np.arange(0.0, (n - 1) * dt + 0.05, 0.1)
-    hd = np.deg2rad(np.clip((fine - 300.0) * 1.0, 0.0, 45.0))
-    v = 5.0 * KNOT * np.stack([np.sin(hd), np.cos(hd)], axis=1)
-    pos = np.concatenate([[[0.0, 0.0]], np.cumsum(v[:-1] * 0.1, axis=0)])
-    t = np.arange(n) * dt
-    idx = np.rint(t / 0.1).astype(int)
-    return t, hd[idx], pos[idx]
+def turning_ownship() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    tr, _ = S.endfire_turn_track()
+    return tr.time, tr.heading, tr.position
 
 
 def measured_cones(rng: np.random.Generator) -> tuple:
