@@ -8,8 +8,11 @@ import numpy as np
 import pytest
 
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.bf_tma import (doppler_factor, range_rate_gradient,
-                                          solve_bearings_frequency)
+from arrayproc.track.batch.bf_tma import (
+    doppler_factor,
+    range_rate_gradient,
+    solve_bearings_frequency,
+)
 from arrayproc.track.batch.bo_tma import cone_model, solve_cone
 
 C = 1500.0
