@@ -357,7 +357,7 @@ def _multipath(pt: _Table, loss: str) -> MultipathSpec:
     """The ``multipath = { … }`` inline table of ``[propagation]``."""
     if not isinstance(pt.raw("multipath"), dict):
         raise pt.err("multipath", "must be a table {surface, bottom_depth, bottom_loss_db, "
-                     f"order, …}}, got {pt.raw('multipath')!r}")
+                     f"order, …}} or \"bellhop\", got {pt.raw('multipath')!r}")
     if loss != "spherical":
         raise pt.err("multipath", f"image sources need loss = \"spherical\" (a {loss} law "
                      "already stands for the boundaries' contribution)")
