@@ -53,12 +53,13 @@ def recording(tmp: Path, snr_db: float | None, tc: float | None, n_snap: int,
     return rp.sim(d, tmp / f"etam_{snr_db}_{tc}_{seed}.h5")
 
 
-def coherence_gain(tmp: Path, tc: float | None, n_snap: int) -> float:
-    """Noise-free: mean ETAM cell power over N_B times one physical snapshot's, dB."""
+def coherence_gain(tmp: Path, tc: float | None, n_snap: int) -> tuple[float, float, float]:
+    """Noise-free: (ETAM gain dB = mean ETAM cell power over N_B times one physical
+    snapshot's; the ETAM and the physical cell powers, linear, for absolute comparisons)."""
     p = recording(tmp, None, tc, n_snap, seed=31)
     one = rp.cell_power(rp.run(rp.PSAS(snapshots=1, snapshot="etam", **KW), p), 90.0).mean()
     et = rp.cell_power(rp.run(rp.ETAM(snapshots=N_B, **KW), p), 90.0).mean()
-    return float(10 * np.log10(et / (N_B * one)))
+    return float(10 * np.log10(et / (N_B * one))), float(et), float(one)
 
 
 def snr_gain(tmp: Path, snr_db: float, tc: float | None, n_snap: int) -> float:
@@ -74,15 +75,25 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--snapshots", type=int, default=30, help="noise-free runs")
     ap.add_argument("--snr-snapshots", type=int, default=100, help="runs with noise")
+    ap.add_argument("--no-snr", action="store_true", help="only the noise-free sweep")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     rows: dict = {"coherence": {}, "snr": {}}
     with tempfile.TemporaryDirectory() as tmp:
+        ref = None
         for tc in TCS:
-            g = coherence_gain(Path(tmp), tc, args.snapshots)
-            rows["coherence"][str(tc)] = g
+            g, et, one = coherence_gain(Path(tmp), tc, args.snapshots)
+            ref = ref or (et, one)  # the coherent tonal's (first in TCS)
+            rows["coherence"][str(tc)] = {"gain_db": g,
+                                          "etam_re_coherent_db": 10 * np.log10(et / ref[0]),
+                                          "physical_re_coherent_db": 10 * np.log10(
+                                              one / ref[1])}
             print(f"noise-free, T_c {'coherent' if tc is None else f'{tc:g} s':>9}: ETAM gain "
-                  f"{g:6.2f} dB (ideal {10 * np.log10(N_B):.0f})", flush=True)
+                  f"{g:6.2f} dB (ideal {10 * np.log10(N_B):.0f}); ETAM cell "
+                  f"{10 * np.log10(et / ref[0]):+.2f} dB and physical cell "
+                  f"{10 * np.log10(one / ref[1]):+.2f} dB re the coherent tonal", flush=True)
+        if args.no_snr:
+            return _dump(rows, args.json)
         for tc in (None, 10.0):
             for snr in SNRS_DB:
                 g = snr_gain(Path(tmp), snr, tc, args.snr_snapshots)
@@ -90,8 +101,12 @@ def main() -> None:
                 print(f"SNR {snr:+5.0f} dB per hydrophone-bin, T_c "
                       f"{'coherent' if tc is None else f'{tc:g} s':>9}: ETAM gain {g:6.2f} dB",
                       flush=True)
-    if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=2))
+    _dump(rows, args.json)
+
+
+def _dump(rows: dict, path: str | None) -> None:
+    if path:
+        Path(path).write_text(json.dumps(rows, indent=2))
 
 
 if __name__ == "__main__":
