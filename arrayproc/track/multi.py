@@ -67,10 +67,14 @@ from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.io.text import as_text
 from arrayproc.track.manage.delete import DeletionRule
-from arrayproc.track.manage.gaussian import ConstantVelocity, EKFBatch, KalmanBatch
+from arrayproc.track.filters.stacked import StackedEKF
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.manager import TrackManager
 from arrayproc.track.manage.tracks import STATUS_CODES, Status, Track, status_names
+from arrayproc.track.models.frame import ObserverRelative
+from arrayproc.track.models.motion import ConstantVelocity
+from arrayproc.track.models.position import ConeAngle, Position
+from arrayproc.track.state import Context
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -251,17 +255,12 @@ def _window(cfg: dict[str, Any]) -> dict[str, Any]:
     return {} if hw is None else {"window": int(hw[1]), "min_hits": int(hw[0])}
 
 
-def cone_filter(bcfg: dict[str, Any]) -> KalmanBatch:
+def cone_filter(bcfg: dict[str, Any]) -> StackedEKF:
     """The bearing / bearing-rate (cone, cone-rate) filter: CV with q_cone, R from σ_cone at
     broadside widened by 1 / sin θ (thesis eq. 2.9) down to ``min_sigma_sin``."""
-    s0 = float(bcfg["sigma_cone_deg"])
-    smin = float(bcfg["min_sigma_sin"])
-
-    def R(Z: np.ndarray, m: int) -> np.ndarray:
-        s = s0 / np.maximum(np.sin(np.deg2rad(Z[:, 0])), smin)
-        return (s ** 2)[:, None, None]
-
-    return KalmanBatch(ConstantVelocity(1, float(bcfg["q_cone"])), np.array([[1.0, 0.0]]), R)
+    return StackedEKF(ConstantVelocity(q1=float(bcfg["q_cone"]), axes=1),
+                      ConeAngle(sigma_deg=float(bcfg["sigma_cone_deg"]),
+                                min_sin=float(bcfg["min_sigma_sin"])))
 
 
 def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str, Any],
@@ -309,7 +308,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         if mirrored:
             mgr.step(t, Z, float(qmul[k]))
         else:
-            mgr.step(t, Z[:, :1], Z[:, :1])
+            mgr.step(t, Z[:, :1], None)
     scan_rows = {t: r for t, _Z, r in scans}
     for tr in mgr.tracks:
         h = tr.arrays()
@@ -494,11 +493,11 @@ def contacts_manager(cfg: dict[str, Any]) -> TrackManager:
     cc = cfg["contacts"]
     model = BearingRangeRate.from_degrees(cc["sigma_bearing_deg"], cc["sigma_range_m"],
                                           cc["sigma_range_rate_mps"])
-    filt = EKFBatch(ConstantVelocity(2, float(cc["q"])), model)
+    filt = StackedEKF(ConstantVelocity(q1=float(cc["q"]), axes=2), ObserverRelative(model))
     sv = float(cc["sigma_speed_mps"])
 
-    def init(Z: np.ndarray, t: float, own: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
-        return model.inverse(Z[j], own, sv)
+    def init(Z: np.ndarray, t: float, ctx: Context, j: int) -> tuple[np.ndarray, np.ndarray]:
+        return model.inverse(Z[j], ctx.own, sv)
 
     return TrackManager(filt, init, association=cfg["association"], gate_prob=cfg["gate_prob"],
                         confirm=cfg["confirm"],
@@ -511,13 +510,12 @@ def positions_manager(cfg: dict[str, Any]) -> TrackManager:
     """Track manager for ``positions``: 3-D CV Kalman filter with each row's covariance (the
     scan context)."""
     pc = cfg["positions"]
-    H = np.hstack([np.eye(3), np.zeros((3, 3))])
-    filt = KalmanBatch(ConstantVelocity(3, float(pc["q"])), H, lambda R, m: R)
+    filt = StackedEKF(ConstantVelocity(q1=float(pc["q"]), axes=3), Position(axes=3))
     sv = float(pc["sigma_speed_mps"])
 
-    def init(Z: np.ndarray, t: float, R: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
+    def init(Z: np.ndarray, t: float, ctx: Context, j: int) -> tuple[np.ndarray, np.ndarray]:
         P = np.zeros((6, 6))
-        P[:3, :3] = R[j]
+        P[:3, :3] = ctx.meas_cov[j]
         P[3:, 3:] = sv * sv * np.eye(3)
         return np.r_[Z[j], 0.0, 0.0, 0.0], P
 
@@ -627,7 +625,7 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
         mgr = contacts_manager(cfg)
         for t, Z, r, own in scans:
             n0 = len(mgr.tracks)
-            mgr.step(t, Z, own)
+            mgr.step(t, Z, Context(own))
             drop_twin_births(mgr.tracks, n0, t, r)
         _attach_rows(mgr.tracks, [(t, r) for t, _Z, r, _o in scans])
         return mgr.tracks, [_cartesian_rows(tr, nav, 2) for tr in mgr.tracks]
@@ -640,7 +638,7 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     for seg in np.split(order, np.flatnonzero(np.diff(t[order]) != 0) + 1):
         if seg.size:
             Z = np.stack([p["x"][seg], p["y"][seg], p["z"][seg]], 1)
-            mgr.step(float(t[seg[0]]), Z, p["cov"][seg])
+            mgr.step(float(t[seg[0]]), Z, Context(np.zeros(4), meas_cov=p["cov"][seg]))
             scans2.append((float(t[seg[0]]), seg))
     _attach_rows(mgr.tracks, scans2)
     return mgr.tracks, [_cartesian_rows(tr, nav, 3) for tr in mgr.tracks]

@@ -25,7 +25,7 @@ import numpy as np
 from arrayproc.errors import ConfigError
 from arrayproc.track.manage.associate import gate_threshold, gnn, jpda, mahalanobis
 from arrayproc.track.manage.delete import DeletionRule
-from arrayproc.track.manage.gaussian import BatchFilter
+from arrayproc.track.filters.stacked import StackedFilter
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.tracks import Status, Track
 
@@ -37,9 +37,10 @@ class TrackManager:
 
     Parameters
     ----------
-    filt : BatchFilter
-        Batched predict / innovation / update (:mod:`arrayproc.track.manage.gaussian`, or
-        :class:`~arrayproc.track.manage.parts.PartsFilter` around the back-end's parts).
+    filt : StackedFilter
+        Predict / innovation / update of stacked tracks
+        (:class:`~arrayproc.track.filters.stacked.StackedEKF` with any motion and measurement
+        model, or a hypothesis bank of them).
     initiator : callable
         ``initiator(Z, t, ctx, j) -> (x, P)`` or None: the state of a new tentative track from
         measurement j of the scan (None: do not start one).
@@ -57,7 +58,7 @@ class TrackManager:
         False measurements per unit measurement volume (JPDA).
     """
 
-    def __init__(self, filt: BatchFilter, initiator: Initiator, association: str = "gnn",
+    def __init__(self, filt: StackedFilter, initiator: Initiator, association: str = "gnn",
                  gate_prob: float = 0.999, confirm: MofN | None = None,
                  delete: DeletionRule | None = None, pd: float = 0.9,
                  clutter_density: float = 1e-3) -> None:

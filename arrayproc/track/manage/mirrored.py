@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.track.manage.gaussian import ConstantVelocity
+from arrayproc.track.models.motion import ConstantVelocity
 
 LOG_FLOOR = math.log(1e-9)
 
@@ -51,7 +51,7 @@ class MirroredBearingBatch:
     """
 
     def __init__(self, q: float, sigma_cone_deg: float, min_sin: float = 0.2) -> None:
-        self.motion = ConstantVelocity(2, float(q))
+        self.motion = ConstantVelocity(q1=float(q), axes=2)
         self.s0 = float(sigma_cone_deg)
         self.min_sin = float(min_sin)
 
@@ -63,7 +63,7 @@ class MirroredBearingBatch:
     def predict(self, X: np.ndarray, P: np.ndarray, dt: np.ndarray, ctx: Any = 1.0
                 ) -> tuple[np.ndarray, np.ndarray]:
         """CV prediction of both hypotheses; ``ctx`` multiplies Q."""
-        F, Q = self.motion.matrices(dt)
+        F, Q = self.motion.transition_stacked(dt), self.motion.covariance_stacked(dt)
         X = X.copy()
         P = P.copy()
         X[:, :4] = np.einsum("nij,nj->ni", F, X[:, :4])
