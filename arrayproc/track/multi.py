@@ -66,8 +66,8 @@ from arrayproc.config import read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.io.text import as_text
-from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.filters.stacked import StackedEKF
+from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.manager import TrackManager
 from arrayproc.track.manage.tracks import STATUS_CODES, Status, Track, status_names
@@ -272,7 +272,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     ``meta['rows']`` of every track holds the products row of each history point (−1:
     coasted), ``meta['cone']``, ``meta['sigma_cone']`` and ``meta['stbd_weight']`` its cone
     angle (deg), σ and starboard weight (NaN in cone space)."""
-    from arrayproc.track.manage.mirrored import MirroredBearingBatch
+    from arrayproc.track.manage.mirrored import mirrored_bank, mirrored_cone, mirrored_initial
     from arrayproc.track.single import ownship_states
 
     b = cfg["bearing"]
@@ -282,10 +282,10 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     if mirrored and nav is None:
         raise ConfigError("tracker.bearing.space = 'bearing' needs the array's navigation")
     if mirrored:
-        filt: Any = MirroredBearingBatch(float(b["q_bearing"]), s0, smin)
+        filt: Any = mirrored_bank(float(b["q_bearing"]), s0, smin)
 
-        def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, np.ndarray]:
-            return MirroredBearingBatch.initial(Z, j, s0, smin, sr)
+        def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, ...]:
+            return mirrored_initial(Z, j, s0, smin, sr)
         pos: tuple[int, ...] = (0, 1, 2, 3)  # rates too: mirror pairs cross in cone
         ts = np.array([t for t, _Z, _r in scans])
         _own, hd = ownship_states(nav, ts)
@@ -306,7 +306,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
                        pd=cfg["pd"], clutter_density=cfg["clutter_density"])
     for k, (t, Z, _rows) in enumerate(scans):
         if mirrored:
-            mgr.step(t, Z, float(qmul[k]))
+            mgr.step(t, Z, Context(np.zeros(4), q_scale=float(qmul[k])))
         else:
             mgr.step(t, Z[:, :1], None)
     scan_rows = {t: r for t, _Z, r in scans}
@@ -320,7 +320,7 @@ def track_cones(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         tr.meta["rows"] = rows
         if mirrored:
             _o, hh = ownship_states(nav, h["time"])
-            c, sc, ws = MirroredBearingBatch.cone(h["x"], h["P"], np.degrees(hh))
+            c, sc, ws = mirrored_cone(filt, h["x"], h["P"], h["logw"], np.degrees(hh))
         else:
             c, sc = h["x"][:, 0], np.sqrt(np.clip(h["P"][:, 0, 0], 0, None))
             ws = np.full(c.size, np.nan)

@@ -18,7 +18,7 @@ from arrayproc.track.base import Param
 from arrayproc.track.models.base import MeasurementModel
 from arrayproc.track.state import Context
 
-__all__ = ["Position", "ConeAngle"]
+__all__ = ["Position", "ConeAngle", "BearingDeg"]
 
 
 class _Selection(MeasurementModel):
@@ -89,3 +89,19 @@ class ConeAngle(_Selection):
 
     def noise_stacked(self, Z: np.ndarray, ctx: Context | None) -> np.ndarray:
         return (self.sigma(Z[:, 0]) ** 2)[:, None, None]
+
+
+class BearingDeg(_Selection):
+    """A bearing (deg) of the first component of a [β, β̇] hypothesis, residuals wrapped at
+    360°; R per measurement from the context's ``meas_cov`` (the mirror sides of a line
+    array's bearing tracks, whose σ widens with the cone angle, thesis eq. 2.9)."""
+
+    name = "bearing_deg"
+    angular = (True,)
+    angle_period = 360.0
+
+    def covariance(self, ctx: Context | None = None) -> np.ndarray:
+        return np.asarray(ctx.meas_cov, float)
+
+    def noise_stacked(self, Z: np.ndarray, ctx: Context | None) -> np.ndarray:
+        return ctx.meas_cov
