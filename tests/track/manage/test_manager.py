@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.filters.stacked import StackedEKF
+from arrayproc.track.manage.delete import DeletionRule
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.manager import TrackManager
 from arrayproc.track.manage.tracks import Status
@@ -14,6 +14,7 @@ from arrayproc.track.models.motion import ConstantVelocity
 from arrayproc.track.models.position import Position
 
 from .conftest import simulate_cv
+
 
 def _manager(association: str = "gnn", sigma: float = 5.0) -> TrackManager:
     filt = StackedEKF(ConstantVelocity(q1=0.05, axes=2), Position(axes=2, sigma=sigma))
