@@ -99,7 +99,8 @@ def update_stacked(model: MeasurementModel, X: np.ndarray, P: np.ndarray, Z: np.
 
 
 class StackedEKF:
-    """The EKF of stacked tracks composed from a motion and a measurement model: the
+    """The EKF of stacked tracks (:meth:`arrayproc.track.filters.EKF.predict_stacked` …)
+    composed with a motion and a measurement model: the
     ``predict`` / ``innovation`` / ``update`` a :class:`~arrayproc.track.manage.manager.
     TrackManager` calls. ``ctx`` of each call is the scan's
     :class:`~arrayproc.track.state.Context` (or None), read by the models; its ``q_scale``
