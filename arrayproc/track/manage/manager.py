@@ -20,7 +20,7 @@ StackedBank`) carries their log-weights; the manager hands them to the filter wi
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -28,11 +28,8 @@ import numpy as np
 from arrayproc.track.filters.stacked import StackedFilter
 from arrayproc.track.manage.associate import GNN, JPDA, make_associator
 from arrayproc.track.manage.delete import DeletionRule
-from arrayproc.track.manage.initiate import MofN
+from arrayproc.track.manage.initiate import Initiator, MofN
 from arrayproc.track.manage.tracks import Status, Track
-
-#: ``initiator(Z, t, ctx, j) -> (x, P)``, ``(x, P, logw)`` for a bank, or None
-Initiator = Callable[[np.ndarray, float, Any, int], "tuple[np.ndarray, ...] | None"]
 
 
 class TrackManager:
