@@ -117,18 +117,24 @@ class HypothesisBank:
         (1 a covariance was repaired, 2 a hypothesis diverged and was dropped)."""
         status = 0
         for h, state in enumerate(self.states):
-            if not self.alive[h]:
-                continue
-            rep = self.filter.n_repairs
-            try:
-                self.states[h] = self.filter.predict(state, self.motion_model, dt, ctx)
-            except FilterDivergence:
-                self._kill(h)
-                status |= 2
-                continue
-            if self.filter.n_repairs > rep:
-                status |= 1
+            if self.alive[h]:
+                st, pred = self._guarded(h, self.filter.predict, state, self.motion_model, dt,
+                                         ctx)
+                status |= st
+                if pred is not None:
+                    self.states[h] = pred
         return status
+
+    def _guarded(self, h: int, step: Any, *args: Any) -> tuple[int, Any]:
+        """``step(*args)`` of hypothesis h: (status bits, result); a divergence drops h and
+        gives (2, None), a repaired covariance sets bit 1."""
+        rep = self.filter.n_repairs
+        try:
+            out = step(*args)
+        except FilterDivergence:
+            self._kill(h)
+            return 2, None
+        return (1 if self.filter.n_repairs > rep else 0), out
 
     def gate(self, z: Any, measurement_model: MeasurementModel, ctx: Context,
              threshold: float) -> bool:
@@ -147,19 +153,12 @@ class HypothesisBank:
         meas = self.measurement_model if measurement_model is None else measurement_model
         status = 0
         for h in range(len(self.states)):
-            if not self.alive[h]:
-                continue
-            rep = self.filter.n_repairs
-            try:
-                upd, ll = self.filter.update(self.states[h], zs[h], meas, ctx)
-            except FilterDivergence:
-                self._kill(h)
-                status |= 2
-                continue
-            if self.filter.n_repairs > rep:
-                status |= 1
-            self.states[h] = upd
-            self.logw[h] += ll
+            if self.alive[h]:
+                st, out = self._guarded(h, self.filter.update, self.states[h], zs[h], meas, ctx)
+                status |= st
+                if out is not None:
+                    self.states[h] = out[0]
+                    self.logw[h] += out[1]
         return status
 
     def normalise(self, who: str = "lr") -> None:
