@@ -13,23 +13,13 @@ from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.pattern import line_array_pattern
+from arrayproc.sim.plane_wave import tonal_plane_wave
 from arrayproc.stages.beamform import _kernels as kb
 from arrayproc.stages.beamform.cbf import CBF, beam_power_reference
 from arrayproc.stages.passive import _kernels as kp
 
 C = 1500.0
-
-
-def plane_wave(n: int, fs: float, positions: np.ndarray, cone_deg: float, freq: float,
-               amp: float = 1.0, phase: float = 0.3) -> np.ndarray:
-    """Exact tonal plane wave from cone angle θ0: x_n(t) = A cos(2π f (t + x_n cos θ0 / c) + φ).
-
-    The element nearer the source (larger x·cos θ0) receives the wavefront earlier (thesis
-    eq. 2.10 without motion).
-    """
-    t = np.arange(n) / fs
-    tau = positions[:, 0] * np.cos(np.deg2rad(cone_deg)) / C
-    return amp * np.cos(2 * np.pi * freq * (t[:, None] + tau[None, :]) + phase)
 
 
 def blocks_of(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,)):
@@ -48,16 +38,6 @@ def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,), **kw
     return stage, np.concatenate([o.data for o in out]), out
 
 
-def i_nh(theta_deg: np.ndarray, theta0_deg: float, f: float, n: int, dx: float) -> np.ndarray:
-    """Thesis eq. (2.13): I_NH(θ, θ0, f) = (1 − e^{jψN}) / (1 − e^{jψ}), ψ = 2π f δx/c (cos θ −
-    cos θ0); its limit N_H where ψ → 0."""
-    psi = 2 * np.pi * f * dx / C * (np.cos(np.deg2rad(theta_deg)) - np.cos(np.deg2rad(theta0_deg)))
-    out = np.full(psi.shape, complex(n))
-    m = np.abs(np.exp(1j * psi) - 1) > 1e-12
-    out[m] = (1 - np.exp(1j * psi[m] * n)) / (1 - np.exp(1j * psi[m]))
-    return out
-
-
 # -- the beam pattern, eq. (2.13) -------------------------------------------------------------
 @pytest.mark.parametrize("theta0", [90.0, 60.0, 125.0])
 def test_beam_pattern_matches_eq_2_13(theta0):
@@ -70,12 +50,12 @@ def test_beam_pattern_matches_eq_2_13(theta0):
     u0 = np.cos(np.deg2rad(theta0))
     lo = np.rad2deg(np.arccos(min(1.0, u0 + du)))
     hi = np.rad2deg(np.arccos(max(-1.0, u0 - du)))
-    x = plane_wave(nfft, fs, pos, theta0, f0, amp=2.0)
+    x = tonal_plane_wave(nfft, fs, pos, theta0, f0, amp=2.0, c=C)
     stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
                           band=[f0 - 1, f0 + 1], beams={"start": lo, "stop": hi, "count": 801})
     assert stage.freqs.size == 1 and abs(stage.freqs[0] - f0) < 1e-9
     got = np.abs(y[0, 0]) ** 2 / (2.0 * nfft / 2) ** 2  # |Y|² / (A N_DFT / 2)²
-    want = np.abs(i_nh(stage.beam_axis, theta0, f0, n_h, dx)) ** 2
+    want = np.abs(line_array_pattern(stage.beam_axis, theta0, f0, n_h, dx, C)) ** 2
     keep = want > want.max() * 10 ** (-40 / 10)  # away from the exact nulls
     err_db = 10 * np.log10(got[keep] / want[keep])
     assert np.max(np.abs(err_db)) < 0.1, np.max(np.abs(err_db))
@@ -88,7 +68,7 @@ def test_3db_beamwidth_matches_eq_2_41(theta0):
     fs, nfft, n_h, dx = 5120.0, 1024, 64, 0.36
     f0 = 200 * fs / nfft  # 1000 Hz
     pos = line_array(n_h, dx)
-    x = plane_wave(nfft, fs, pos, theta0, f0)
+    x = tonal_plane_wave(nfft, fs, pos, theta0, f0, c=C)
     stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
                           band=[f0 - 1, f0 + 1],
                           beams={"start": theta0 - 4, "stop": theta0 + 4, "count": 1601})
@@ -119,7 +99,7 @@ def test_array_gain_is_n_h(rng):
     theta0 = 70.0
     n = nfft * 200
     noise = rng.standard_normal((n, n_h))
-    sig = plane_wave(n, fs, pos, theta0, f0, amp=0.05)
+    sig = tonal_plane_wave(n, fs, pos, theta0, f0, amp=0.05, c=C)
     kw = dict(nfft=nfft, hop=nfft, window="hann", band=[f0 - 40, f0 + 40],
               beams={"start": theta0, "stop": theta0, "count": 1})
     _, yn, _ = run_cbf(noise, fs, pos, **kw)
@@ -294,7 +274,7 @@ def test_shading_lowers_sidelobes_as_asked():
     fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
     f0 = 250 * fs / nfft
     pos = line_array(n_h, dx)
-    x = plane_wave(nfft, fs, pos, 90.0, f0)
+    x = tonal_plane_wave(nfft, fs, pos, 90.0, f0, c=C)
     for kind, sll in (("chebyshev", 35.0), ("taylor", 30.0)):
         stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
                               band=[f0 - 1, f0 + 1],
