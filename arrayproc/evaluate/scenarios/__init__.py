@@ -1,0 +1,21 @@
+"""Scenarios of the papers the toolkit reproduces, one module per paper or thesis chapter.
+
+- :mod:`.spl_paper` — the SPL paper's three bearings-and-level TMA scenarios (section 5).
+- :mod:`.thesis_delay` — thesis chapter 3 time-delay estimation (figs. 3.15, 3.16), GCC-PHAT
+  under an echo, and compact-array localisation against the CRLB.
+- :mod:`.thesis_passive` — thesis chapter 2 passive chain: CBF pattern, beamwidth, array
+  gain, integration statistics, DFT filter, and the simulated end-to-end run.
+- :mod:`.thesis_tma` — thesis 3.3.3 batch TMA Monte Carlo (fig. 3.19).
+
+The L-R paper's section-V scenario is :mod:`arrayproc.evaluate.montecarlo`. The SPL names are
+importable from here as well.
+"""
+
+from arrayproc.evaluate.scenarios.spl_paper import (
+    SCENARIOS,
+    ScenarioData,
+    SPLScenario,
+    get_scenario,
+)
+
+__all__ = ["SPLScenario", "SCENARIOS", "get_scenario", "ScenarioData"]
