@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.chain.memory import array_blocks, run_stage
 from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
@@ -22,20 +23,10 @@ from arrayproc.stages.passive import _kernels as kp
 C = 1500.0
 
 
-def blocks_of(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,)):
-    i, k = 0, 0
-    while i < x.shape[0]:
-        s = min(sizes[k % len(sizes)], x.shape[0] - i)
-        yield Block(x[i:i + s].astype(np.float32), Domain.TIME, i / fs, s / fs, fs,
-                    positions, None, meta=TimeMeta(i, s))
-        i += s
-        k += 1
-
-
 def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,), **kw):
     stage = CBF(**kw)
-    out = list(stage.process(blocks_of(x, fs, positions, sizes)))
-    return stage, np.concatenate([o.data for o in out]), out
+    y, out = run_stage(stage, x, fs, positions, sizes)
+    return stage, y, out
 
 
 # -- the beam pattern, eq. (2.13) -------------------------------------------------------------
@@ -504,8 +495,8 @@ def test_frames_do_not_depend_on_how_the_stream_is_cut(sizes, hop, batch, seed):
     x = g.standard_normal((1500, n_h)).astype(np.float32)
     stage = CBF(nfft=256, hop=hop, window="hann", band=[100.0, 700.0], batch=batch)
     whole = np.concatenate([o.data.copy() for o in stage.process(
-        blocks_of(x, fs, pos, (x.shape[0],)))])
-    blocks = list(blocks_of(x, fs, pos, tuple(sizes)))
+        array_blocks(x, fs, pos, (x.shape[0],)))])
+    blocks = list(array_blocks(x, fs, pos, tuple(sizes)))
     copies = [b.data.copy() for b in blocks]
     cut = np.concatenate([o.data for o in stage.process(iter(blocks))])
     np.testing.assert_array_equal(cut, whole)

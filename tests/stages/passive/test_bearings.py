@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from arrayproc.chain import RunContext
-from arrayproc.chain.block import Block
-from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.chain.memory import array_blocks
 from arrayproc.dsp.peaks import parabolic_vertex, pick_peaks
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
@@ -50,11 +49,7 @@ def run_bearings(x, fs, pos, heading, tmp_path, **kw):
     out = tmp_path / "b.h5"
     with ProductsWriter(out) as w:
         brg.bind(RunContext(products=w))
-        blocks = []
-        for i in range(0, x.shape[0], 4096):
-            n = min(4096, x.shape[0] - i)
-            blocks.append(Block(x[i:i + n].astype(np.float32), Domain.TIME, i / fs,
-                                n / fs, fs, pos, None, meta=TimeMeta(i, n)))
+        blocks = list(array_blocks(x, fs, pos, (4096,)))
 
         def with_heading(bs):
             for b in bs:  # no recording: give the headings the chain would take from /nav
