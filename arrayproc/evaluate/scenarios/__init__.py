@@ -16,6 +16,8 @@
 - :mod:`.thesis_synthetic_aperture` — thesis chapter 2 PSAS, ETAM and IBF on simulated
   recordings (table 2.1b, figs. 2.8, 2.11, 2.12, two sources).
 - :mod:`.thesis_tma` — thesis 3.3.3 batch TMA Monte Carlo (fig. 3.19).
+- :mod:`.thesis_doppler_spread` — thesis fig. 4.4, matched-filter loss of BPSK and HFM
+  echoes under time distortion.
 - :mod:`.thesis_active` — thesis chapter 4, the simulated active scenario's contacts against
   the echo truth.
 - :mod:`.active_tracking` — the multi-target tracker on those contacts, scored against the
