@@ -12,19 +12,6 @@ from arrayproc.evaluate.scenarios.thesis_tma import fig_3_19, solver_seeds, tma_
 distributed = pytest.importorskip("distributed")
 
 
-@pytest.fixture(scope="module")
-def clients():
-    from arrayproc.app.batch import start_client
-    out = {}
-    for n in (1, 2):
-        out[n] = start_client(workers=n, threads=1)
-        out[n][0].wait_for_workers(n)
-    yield {n: c for n, (c, _) in out.items()}
-    for c, cluster in out.values():
-        c.close()
-        cluster.close()
-
-
 def test_batch_tma_same_numbers_on_one_and_two_workers(clients):
     """4 runs in chunks of 2 (seeded from SeedSequence(3)): every run's BO- and TD-TMA errors
     and the table's statistics are the same bytes on 1 and on 2 workers; the chunks draw

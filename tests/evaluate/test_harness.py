@@ -63,25 +63,15 @@ def test_bad_arguments():
 
 
 @pytest.fixture(scope="module")
-def clients():
-    pytest.importorskip("distributed")
+def by_value():
+    """The workers need not import this test module: ship its trial by value."""
     import cloudpickle
-
-    from arrayproc.app.batch import start_client
-    # the workers need not import this test module: ship its trial by value
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    out = {}
-    for n in (1, 2):
-        out[n] = start_client(workers=n, threads=1)
-        out[n][0].wait_for_workers(n)
-    yield {n: c for n, (c, _) in out.items()}
-    for c, cluster in out.values():
-        c.close()
-        cluster.close()
+    yield
     cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
 
 
-def test_one_and_two_workers_give_the_same_bytes(clients):
+def test_one_and_two_workers_give_the_same_bytes(clients, by_value):
     here = monte_carlo(_trial, 9, 123, chunk=2, n=5)
     one = monte_carlo(_trial, 9, 123, client=clients[1], chunk=2, n=5)
     two = monte_carlo(_trial, 9, 123, client=clients[2], chunk=4, n=5)

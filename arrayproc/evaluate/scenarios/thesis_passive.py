@@ -42,16 +42,20 @@ from arrayproc.stages.beamform.cbf import CBF
 from arrayproc.stages.condition.dft_filter import DFTFilter
 from arrayproc.stages.passive.integrate import Integrate
 
-__all__ = ["C", "SOURCES", "NL", "CHAIN", "pattern_error", "beamwidth_ratio", "array_gain_db",
-           "gamma_ks", "dft_filter_figures", "dense_response", "scenario", "run_e2e",
+__all__ = ["C", "SOURCES", "NL", "CHAIN", "run_cbf", "pattern_error", "beamwidth_ratio",
+           "array_gain_db", "gamma_ks", "dft_filter_figures", "dense_response", "scenario",
+           "run_e2e",
            "score_e2e", "e2e"]
 
 C = 1500.0
 
 
-def _run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, **kw):
+def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes: tuple[int, ...] = (8192,),
+            **kw) -> tuple[CBF, np.ndarray, list]:
+    """A CBF stage with settings ``kw`` run over ``x`` cut into blocks of ``sizes``: the
+    stage, its output data concatenated, and its output blocks."""
     stage = CBF(**kw)
-    y, out = run_stage(stage, x, fs, positions)
+    y, out = run_stage(stage, x, fs, positions, sizes)
     return stage, y, out
 
 
@@ -77,7 +81,7 @@ def pattern_error(theta0: float) -> float:
     lo = np.rad2deg(np.arccos(min(1.0, u0 + du)))
     hi = np.rad2deg(np.arccos(max(-1.0, u0 - du)))
     x = tonal_plane_wave(nfft, fs, pos, theta0, f0, amp=2.0, c=C)
-    st, y, _ = _run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=[f0 - 1, f0 + 1],
+    st, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=[f0 - 1, f0 + 1],
                           beams={"start": lo, "stop": hi, "count": 801})
     got = np.abs(y[0, 0]) ** 2 / nfft**2
     want = np.abs(line_array_pattern(st.beam_axis, theta0, f0, n_h, dx, C)) ** 2
@@ -92,7 +96,7 @@ def beamwidth_ratio(theta0: float) -> float:
     f0 = 200 * fs / nfft
     pos = line_array(n_h, dx)
     x = tonal_plane_wave(nfft, fs, pos, theta0, f0, c=C)
-    st, y, _ = _run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=[f0 - 1, f0 + 1],
+    st, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=[f0 - 1, f0 + 1],
                           beams={"start": theta0 - 4, "stop": theta0 + 4, "count": 1601})
     p = 10 * np.log10(np.abs(y[0, 0]) ** 2)
     p -= p.max()
@@ -109,10 +113,11 @@ def beamwidth_ratio(theta0: float) -> float:
     return float(np.deg2rad(right - left) / want)
 
 
-def array_gain_db() -> float:
+def array_gain_db(rng: np.random.Generator | None = None) -> float:
     """Array gain (dB) of 32 hydrophones, plane wave against white noise (expected
-    10 log10 N_H)."""
-    rng = np.random.default_rng(12345)
+    10 log10 N_H), thesis 2.1.1: the SNR at the steered beam over the per-hydrophone SNR of
+    the same DFTs, noise drawn from ``rng`` (default ``default_rng(12345)``)."""
+    rng = np.random.default_rng(12345) if rng is None else rng
     fs, nfft, n_h, dx = 2048.0, 512, 32, 0.75
     pos = line_array(n_h, dx)
     f0 = 150 * fs / nfft
@@ -121,8 +126,8 @@ def array_gain_db() -> float:
     sig = tonal_plane_wave(n, fs, pos, 70.0, f0, amp=0.05, c=C)
     kw = dict(nfft=nfft, hop=nfft, window="hann", band=[f0 - 40, f0 + 40],
               beams={"start": 70.0, "stop": 70.0, "count": 1})
-    _, yn, _ = _run_cbf(noise, fs, pos, **kw)
-    st, ys, _ = _run_cbf(sig, fs, pos, **kw)
+    _, yn, _ = run_cbf(noise, fs, pos, **kw)
+    st, ys, _ = run_cbf(sig, fs, pos, **kw)
     w = time_taper("hann", nfft)
     xn = np.fft.rfft(noise.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
     xs = np.fft.rfft(sig.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)

@@ -10,9 +10,10 @@ from hypothesis import strategies as st
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
-from arrayproc.chain.memory import array_blocks, run_stage
+from arrayproc.chain.memory import array_blocks
 from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.thesis_passive import array_gain_db, run_cbf
 from arrayproc.io.geometry import line_array
 from arrayproc.sim.pattern import line_array_pattern
 from arrayproc.sim.plane_wave import tonal_plane_wave
@@ -21,12 +22,6 @@ from arrayproc.stages.beamform.cbf import CBF, beam_power_reference
 from arrayproc.stages.passive import _kernels as kp
 
 C = 1500.0
-
-
-def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,), **kw):
-    stage = CBF(**kw)
-    y, out = run_stage(stage, x, fs, positions, sizes)
-    return stage, y, out
 
 
 # -- the beam pattern, eq. (2.13) -------------------------------------------------------------
@@ -83,32 +78,18 @@ def test_3db_beamwidth_matches_eq_2_41(theta0):
 
 
 def test_array_gain_is_n_h(rng):
-    """White noise vs plane wave: SNR gain at the steered beam = 10 log10 N_H (thesis 2.1.1)."""
+    """White noise vs plane wave: SNR gain at the steered beam = 10 log10 N_H (thesis 2.1.1;
+    the set-up of ``thesis_passive.array_gain_db``)."""
     fs, nfft, n_h, dx = 2048.0, 512, 32, 0.75
     pos = line_array(n_h, dx)
     f0 = 150 * fs / nfft
-    theta0 = 70.0
-    n = nfft * 200
-    noise = rng.standard_normal((n, n_h))
-    sig = tonal_plane_wave(n, fs, pos, theta0, f0, amp=0.05, c=C)
-    kw = dict(nfft=nfft, hop=nfft, window="hann", band=[f0 - 40, f0 + 40],
-              beams={"start": theta0, "stop": theta0, "count": 1})
-    _, yn, _ = run_cbf(noise, fs, pos, **kw)
-    st_s, ys, _ = run_cbf(sig, fs, pos, **kw)
-    # per-hydrophone reference: the same DFTs without beamforming
-    w = time_window("hann", nfft)
-    xn = np.fft.rfft(noise.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
-    xs = np.fft.rfft(sig.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
-    fb = np.fft.rfftfreq(nfft, 1 / fs)
-    sel = (fb >= f0 - 40) & (fb <= f0 + 40)
-    kf = int(np.argmin(np.abs(st_s.freqs - f0)))
-    ks = int(np.argmin(np.abs(fb[sel] - f0)))
-    snr_in = np.mean(np.abs(xs[:, sel][:, ks]) ** 2) / np.mean(np.abs(xn[:, sel]) ** 2)
-    snr_out = np.mean(np.abs(ys[:, kf, 0]) ** 2) / np.mean(np.abs(yn[:, :, 0]) ** 2)
-    gain_db = 10 * np.log10(snr_out / snr_in)
+    gain_db = array_gain_db(rng)
     assert abs(gain_db - 10 * np.log10(n_h)) < 0.3, gain_db
+    noise = rng.standard_normal((nfft * 200, n_h))
+    kw = dict(nfft=nfft, hop=nfft, band=[f0 - 40, f0 + 40],
+              beams={"start": 70.0, "stop": 70.0, "count": 1})
     # and the noise output variance is N_DFT N_H σ² (thesis 2.1.1.1) for a rectangular window
-    _, yr, _ = run_cbf(noise, fs, pos, **{**kw, "window": "none"})
+    _, yr, _ = run_cbf(noise, fs, pos, window="none", **kw)
     assert abs(np.mean(np.abs(yr) ** 2) / (nfft * n_h) - 1) < 0.03
 
 
