@@ -136,3 +136,26 @@ def echo_truth(rec) -> dict[str, np.ndarray] | None:
             "level_db": np.asarray(e["level_db"], float),
             "cone_deg": np.rad2deg(np.arccos(np.clip(cosang, -1, 1))),
             "name": np.array([names[i] for i in tgt]), "kind": np.array([kinds[i] for i in tgt])}
+
+
+def active_scene(path) -> dict:
+    """The raw truth of a simulated active recording (file ``path``): ``sound_speed`` (m/s),
+    ``ping_time`` (s), the ``submarine`` source's and the ``ownship``'s ``time``/``position``/
+    ``velocity`` (and ownship ``heading``, deg), the scatterers' ``names``, ``kinds`` and
+    horizontal ``position0`` (m), and the ``echoes`` (``ping``, ``target``, ``time``,
+    ``range_m``, ``range_rate_mps``)."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        return {
+            "sound_speed": float(f.attrs.get("sound_speed", 1500.0)),
+            "ping_time": f["truth/pings/time"][()],
+            "submarine": {k: f[f"truth/sources/submarine/{k}"][()]
+                          for k in ("time", "position", "velocity")},
+            "ownship": {k: f[f"truth/ownship/{k}"][()]
+                        for k in ("time", "position", "velocity", "heading")},
+            "names": [as_text(v) for v in f["truth/scatterers/name"][()]],
+            "kinds": [as_text(v) for v in f["truth/scatterers/kind"][()]],
+            "position0": f["truth/scatterers/position0"][()][:, :2],
+            "echoes": {k: f[f"truth/echoes/{k}"][()]
+                       for k in ("ping", "target", "time", "range_m", "range_rate_mps")},
+        }

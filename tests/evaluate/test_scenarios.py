@@ -193,3 +193,31 @@ def test_doppler_spread_costs_the_bpsk_more_than_the_hfm():
         p1 = ds.peak(ds.direct(w, 0.5e-3), w, kind)
         loss[kind] = 20 * np.log10(p0 / p1)
     assert 0.0 < loss["hfm"] < loss["bpsk"]
+
+
+def test_active_scene_reads_the_truth_groups(tmp_path):
+    """io.truth.active_scene through ActiveTruth: the interpolated ownship and submarine."""
+    import h5py
+    p = tmp_path / "t.h5"
+    with h5py.File(p, "w") as f:
+        f.attrs["sound_speed"] = 1490.0
+        f["truth/pings/time"] = np.array([0.0, 30.0])
+        for g, extra in (("truth/sources/submarine", {}),
+                         ("truth/ownship", {"heading": np.array([350.0, 10.0])})):
+            f[f"{g}/time"] = np.array([0.0, 60.0])
+            f[f"{g}/position"] = np.array([[0.0, 0.0], [60.0, 120.0]])
+            f[f"{g}/velocity"] = np.array([[1.0, 2.0], [1.0, 2.0]])
+            for k, v in extra.items():
+                f[f"{g}/{k}"] = v
+        f["truth/scatterers/name"] = np.array([b"submarine", b"rock"])
+        f["truth/scatterers/kind"] = np.array([b"target", b"clutter"])
+        f["truth/scatterers/position0"] = np.array([[0.0, 0.0, 50.0], [10.0, 20.0, 90.0]])
+        for k in ("ping", "target", "time", "range_m", "range_rate_mps"):
+            f[f"truth/echoes/{k}"] = np.array([0, 1])
+    tr = at.read_truth(p)
+    assert tr.c == 1490.0 and tr.i_sub == 0 and tr.clutter.tolist() == [False, True]
+    assert np.allclose(tr.sc_pos, [[0.0, 0.0], [10.0, 20.0]])
+    xy, v, hd = tr.own_at(np.array([30.0]))
+    assert np.allclose(xy, [[30.0, 60.0]]) and np.allclose(v, [[1.0, 2.0]])
+    assert hd[0] == pytest.approx(0.0, abs=1e-9) or hd[0] == pytest.approx(360.0)  # unwrapped
+    assert np.allclose(tr.sub_at(np.array([15.0]))[0], [[15.0, 30.0]])

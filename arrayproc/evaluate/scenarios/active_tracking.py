@@ -19,12 +19,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from arrayproc.evaluate.metrics import over_time, track_scores
 from arrayproc.io.products import read_products
 from arrayproc.io.text import as_text
+from arrayproc.io.truth import active_scene
 from arrayproc.track.manage.tracks import status_names
 from arrayproc.track.multi import split_config
 
@@ -85,20 +85,11 @@ class ActiveTruth:
 
 
 def read_truth(rec: Path) -> ActiveTruth:
-    """:class:`ActiveTruth` of a simulated active recording."""
-    with h5py.File(rec, "r") as f:
-        c = float(f.attrs.get("sound_speed", 1500.0))
-        ping_t = f["truth/pings/time"][()]
-        sub = {k: f[f"truth/sources/submarine/{k}"][()] for k in ("time", "position",
-                                                                    "velocity")}
-        own = {k: f[f"truth/ownship/{k}"][()] for k in ("time", "position", "velocity",
-                                                        "heading")}
-        names = [as_text(v) for v in f["truth/scatterers/name"][()]]
-        kinds = [as_text(v) for v in f["truth/scatterers/kind"][()]]
-        sc_pos = f["truth/scatterers/position0"][()][:, :2]
-        echoes = {k: f[f"truth/echoes/{k}"][()] for k in ("ping", "target", "time",
-                                                          "range_m", "range_rate_mps")}
-    return ActiveTruth(c, ping_t, sub, own, names, kinds, sc_pos, echoes)
+    """:class:`ActiveTruth` of a simulated active recording
+    (:func:`arrayproc.io.truth.active_scene`)."""
+    t = active_scene(rec)
+    return ActiveTruth(t["sound_speed"], t["ping_time"], t["submarine"], t["ownship"],
+                       t["names"], t["kinds"], t["position0"], t["echoes"])
 
 
 def score_contacts(truth: ActiveTruth, prod: Path, tracker_cfg: str) -> tuple[dict, dict]:
