@@ -1,18 +1,20 @@
 """Far-field plane waves on an array, built in closed form (no propagation model).
 
 The test-signal generators that the beamformer checks compare against: a tonal from one cone
-angle, and independent broadband sources applied with exact frequency-domain delays. The cone
-angle θ0 is measured from the array's +x axis (0° forward end-fire, 90° broadside); an element
-at axial position x_n receives the wavefront x_n cos θ0 / c earlier than the origin (thesis
-eq. (2.10) without motion). The full simulator (:mod:`arrayproc.sim.run`) adds spreading,
-retarded times and platform motion; these are its far-field, static limit.
+angle, independent broadband sources applied with exact frequency-domain delays, and tonals
+seen by an array towed along its axis with a lateral offset (thesis 2.2.2). The cone angle θ0
+is measured from the array's +x axis (0° forward end-fire, 90° broadside); an element at axial
+position x_n receives the wavefront x_n cos θ0 / c earlier than the origin (thesis eq. (2.10)
+without motion). The full simulator (:mod:`arrayproc.sim.run`) adds spreading, retarded times
+and platform motion; these are its far-field limit.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plane_wave_advances", "tonal_plane_wave", "broadband_plane_waves"]
+__all__ = ["plane_wave_advances", "tonal_plane_wave", "broadband_plane_waves",
+           "towed_tonal_plane_waves"]
 
 
 def plane_wave_advances(positions: np.ndarray, cone_deg: float, c: float = 1500.0
@@ -103,4 +105,47 @@ def broadband_plane_waves(n: int, fs: float, positions: np.ndarray, cones_deg, a
         tau = plane_wave_advances(positions, cone, c)
         x += np.fft.irfft(s[:, None] * np.exp(2j * np.pi * f[:, None] * tau[None, :]), n,
                           axis=0)
+    return x
+
+
+def towed_tonal_plane_waves(t: np.ndarray, positions: np.ndarray, speed: float, waves,
+                            c: float = 1500.0, lateral: np.ndarray | None = None,
+                            phases=None) -> np.ndarray:
+    """Stationary tonal plane waves seen by a line array moving along its axis.
+
+    p_n(t) = Σ_w A_w cos(2π f_w (t + (l(t) sin θ_w + (U t + x_n) cos θ_w) / c) + φ_w): element
+    n at axial position U t + x_n and lateral offset l(t) (thesis 2.2.2), each wave from cone
+    θ_w on the starboard side.
+
+    Parameters
+    ----------
+    t : (T,) array
+        Times, s.
+    positions : (N, 3) array
+        Element positions along the axis (column 0), m.
+    speed : float
+        Array speed U along its axis, m/s.
+    waves : sequence of (freq Hz, cone deg, amplitude)
+        The plane waves.
+    c : float
+        Sound speed, m/s.
+    lateral : (T,) array, optional
+        Lateral offset l(t), m (default 0).
+    phases : sequence of float, optional
+        φ_w, rad (default 0).
+
+    Returns
+    -------
+    (T, N) ndarray
+        The waves summed in order.
+    """
+    t = np.asarray(t, float)
+    lat = np.zeros_like(t) if lateral is None else np.asarray(lateral, float)
+    x = np.zeros((t.size, np.asarray(positions).shape[0]))
+    along = speed * t[:, None] + np.asarray(positions)[None, :, 0]
+    for i, (f, cone, amp) in enumerate(waves):
+        u, s = np.cos(np.deg2rad(cone)), np.sin(np.deg2rad(cone))
+        phase = 0.0 if phases is None else phases[i]
+        x += amp * np.cos(2 * np.pi * f * (t[:, None] + (lat[:, None] * s + along * u) / c)
+                          + phase)
     return x

@@ -13,6 +13,7 @@ from arrayproc.sim.plane_wave import (
     broadband_plane_waves,
     plane_wave_advances,
     tonal_plane_wave,
+    towed_tonal_plane_waves,
 )
 
 C = 1500.0
@@ -93,3 +94,25 @@ def test_pattern_is_the_sum_of_the_element_phasors():
     direct = np.exp(1j * psi[:, None] * np.arange(n)[None]).sum(1)
     got = line_array_pattern(th, 50.0, f, n, dx)
     assert np.allclose(got, direct, rtol=0, atol=1e-10 * n)
+
+
+def test_towed_waves_reduce_to_the_static_tonal_and_shift_with_the_array():
+    """U = 0, no lateral offset: the static tonal; moving at U, element n at time t sees what
+    a static array element at x_n + U t sees (the wave is stationary)."""
+    fs, n = 4096.0, 512
+    pos = line_array(6, 0.5)
+    t = np.arange(n) / fs
+    got = towed_tonal_plane_waves(t, pos, 0.0, [(300.0, 55.0, 0.7)], phases=[0.3])
+    want = tonal_plane_wave(n, fs, pos, 55.0, 300.0, amp=0.7, phase=0.3)
+    assert np.allclose(got, want, rtol=0, atol=1e-12)
+    U = 2.5
+    mv = towed_tonal_plane_waves(t, pos, U, [(300.0, 55.0, 1.0)])
+    k = 200
+    moved = pos.copy()
+    moved[:, 0] += U * t[k]
+    ref = np.cos(2 * np.pi * 300.0 * (t[k] + moved[:, 0] * np.cos(np.deg2rad(55.0)) / C))
+    assert np.allclose(mv[k], ref, rtol=0, atol=1e-9)
+    # a lateral offset l acts as the starboard path difference l sin θ / c
+    lat = np.full(n, 0.2)
+    la = towed_tonal_plane_waves(t, pos, 0.0, [(300.0, 90.0, 1.0)], lateral=lat)
+    assert np.allclose(la[:, 0], np.cos(2 * np.pi * 300.0 * (t + 0.2 / C)), atol=1e-12)
