@@ -42,10 +42,9 @@ from arrayproc.stages.beamform.cbf import CBF
 from arrayproc.stages.condition.dft_filter import DFTFilter
 from arrayproc.stages.passive.integrate import Integrate
 
-__all__ = ["C", "SOURCES", "NL", "CHAIN", "run_cbf", "pattern_error", "beamwidth_ratio",
-           "array_gain_db", "gamma_ks", "dft_filter_figures", "dense_response", "scenario",
-           "run_e2e",
-           "score_e2e", "e2e"]
+__all__ = ["C", "SOURCES", "NL", "CHAIN", "run_cbf", "cbf_pattern", "pattern_error",
+           "beamwidth_ratio", "array_gain_db", "gamma_ks", "dft_filter_figures",
+           "dense_response", "scenario", "run_e2e", "score_e2e", "e2e"]
 
 C = 1500.0
 
@@ -69,10 +68,17 @@ def dense_response(taps: np.ndarray, fs: float, n: int = 1 << 18
     return np.fft.fftfreq(n, 1 / fs), np.abs(np.fft.fft(h))
 
 
-def pattern_error(theta0: float) -> float:
-    """Max |error| (dB) of the CBF beam pattern against |I_NH|² (eq. (2.13)) over the main
-    lobe and first sidelobes (down to −40 dB), 32 hydrophones 0.75 m apart, plane wave from
-    ``theta0`` (deg)."""
+def cbf_pattern(theta0: float) -> tuple[CBF, np.ndarray, np.ndarray]:
+    """The CBF beam pattern of a plane wave from ``theta0`` (deg) and eq. (2.13), over the main
+    lobe and the first sidelobe on each side (up to the second nulls, cos θ = cos θ0 ±
+    2 c / (f N δx)): 32 hydrophones 0.75 m apart, a tone on a bin (its DFT is A N_DFT / 2).
+
+    Returns
+    -------
+    (CBF, ndarray, ndarray)
+        The stage (its ``beam_axis``, deg, and ``freqs``), the measured power |Y|² / (A N_DFT
+        / 2)² and |I_NH|² on the beam axis.
+    """
     fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
     f0 = 250 * fs / nfft
     pos = line_array(n_h, dx)
@@ -82,9 +88,16 @@ def pattern_error(theta0: float) -> float:
     hi = np.rad2deg(np.arccos(max(-1.0, u0 - du)))
     x = tonal_plane_wave(nfft, fs, pos, theta0, f0, amp=2.0, c=C)
     st, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none", band=[f0 - 1, f0 + 1],
-                          beams={"start": lo, "stop": hi, "count": 801})
+                       beams={"start": lo, "stop": hi, "count": 801})
     got = np.abs(y[0, 0]) ** 2 / nfft**2
     want = np.abs(line_array_pattern(st.beam_axis, theta0, f0, n_h, dx, C)) ** 2
+    return st, got, want
+
+
+def pattern_error(theta0: float) -> float:
+    """Max |error| (dB) of the CBF beam pattern against |I_NH|² (eq. (2.13)) over the main
+    lobe and first sidelobes (down to −40 dB), :func:`cbf_pattern`."""
+    _, got, want = cbf_pattern(theta0)
     keep = want > want.max() * 1e-4
     return float(np.max(np.abs(10 * np.log10(got[keep] / want[keep]))))
 
