@@ -69,5 +69,5 @@ from arrayproc.track.multi.tma import resolved_side, tma_track
 
 __all__ = ["run_multi", "tracker_mode", "split_config", "check_multi_config", "multi_target",
            "bearing_scans", "cone_filter", "track_cones", "tma_track", "resolved_side",
-           "contact_scans", "contacts_manager", "drop_twin_births", "positions_manager", "confirmed_status",
-           "compose_manager", "MULTI_KEYS", "SUB_PARAMS"]
+           "contact_scans", "contacts_manager", "drop_twin_births", "positions_manager",
+           "confirmed_status", "compose_manager", "MULTI_KEYS", "SUB_PARAMS"]
