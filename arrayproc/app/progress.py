@@ -79,7 +79,7 @@ def audio_bar(progress: bool, desc: str) -> AudioBar | None:
 # -- the summary line ---------------------------------------------------------------------------
 def format_seconds(t: float) -> str:
     """Wall time as ``0.42 s``, ``2.4 s``, ``153 s``."""
-    return f"{t:.2f} s" if t < 1 else f"{t:.1f} s" if t < 100 else f"{t:.0f} s"
+    return f"{t:.2g} s" if t < 10 else f"{t:.0f} s"  # two significant digits at least
 
 
 def format_ratio(r: float) -> str:
