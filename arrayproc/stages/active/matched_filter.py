@@ -54,9 +54,9 @@ class MatchedFilter(Stage):
     produces = Domain.RANGE_DOPPLER
     params = {
         "range_rate": Param("table", {}, "range-rate channels {min, max, step}, m/s (default "
-                            "+-15 m/s at the waveform's 3 dB Doppler resolution)"),
+                            "+-15 m/s at the waveform's 3 dB Doppler resolution)", unit="m/s"),
         "chunk": Param("int", 8, "beams per output block", check=positive),
-        "max_range_m": Param("float", 0.0, "longest range kept, m (0: the whole window)"),
+        "max_range_m": Param("float", 0.0, "longest range kept, m (0: the whole window)", unit="m"),
         "bracket": Param("table", None, "{source, range_m, cone_deg}: bracket mode"),
         "range_doppler": Param("table", None, "{pings, cones, range_m}: write range_doppler"),
         "threads": Param("int", 0, "FFT threads (0: all cores)"),

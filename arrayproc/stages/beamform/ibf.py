@@ -193,16 +193,17 @@ class IBF(Stage):
     params = {
         "max_sources": Param("int", 3, "plane waves removed per bin at most", check=positive),
         "stop_db": Param("float", 3.0, "stop when the loudest beam is less than this above the "
-                         "noise estimate, dB"),
-        "sector": Param("band", None, "[lo, hi] cone angles (deg) to peel (default: all)"),
+                         "noise estimate, dB", unit="dB"),
+        "sector": Param("band", None, "[lo, hi] cone angles (deg) to peel (default: all)",
+                        unit="deg"),
         "keep_sources": Param("int", 2, "waves outside the sector (or beyond max_sources) kept "
                               "in the joint estimate but not removed, per bin"),
         "snapshot": Param("str", "etam", "snapshot length when framing time data: from the nav "
                           "speed by the 'etam' (eq. 2.52) or 'psas' (eq. 2.32) rule, or 'nfft'",
                           choices=("etam", "psas", "nfft")),
-        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'"),
+        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'", unit="samples"),
         "window": Param("str", "none", "time taper", choices=("none", "hann", "hamming")),
-        "band": Param("band", None, "[lo, hi] Hz (default: all bins)"),
+        "band": Param("band", None, "[lo, hi] Hz (default: all bins)", unit="Hz"),
         "record": Param("bool", True, "write removed waves to the products group"),
     }
 

@@ -123,7 +123,7 @@ class DFTFilter(Stage):
     accepts = frozenset({Domain.TIME})
     produces = Domain.TIME
     params = {
-        "band": Param("band", doc="[lo, hi] Hz kept (Tukey window spans it)"),
+        "band": Param("band", doc="[lo, hi] Hz kept (Tukey window spans it)", unit="Hz"),
         "taper": Param("float", 0.1, "Tukey α of the band window, 0..1"),
         "decimate": Param("int", 1, "integer decimation factor", check=positive),
         "complex": Param("bool", False, "complex baseband output instead of a real series"),

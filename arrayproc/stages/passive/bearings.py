@@ -74,23 +74,27 @@ class Bearings(Stage):
     kind = "bearings"
     accepts = frozenset({Domain.POWER})
     params = {
-        "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)"),
+        "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)",
+                      unit="Hz"),
         "broadband": Param("bool", True, "pick peaks on the broadband (BTR) beam power"),
         "lines": Param("bool", False, "pick peaks on narrowband (LOFAR) lines"),
-        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB"),
-        "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB"),
+        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB",
+                              unit="dB"),
+        "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB",
+                                   unit="dB"),
         "line_dynamic_db": Param("float", 10.0, "line peaks more than this below the line's "
                                  "strongest peak are taken for its sidelobes, dB",
-                                 check=positive),
+                                 check=positive, unit="dB"),
         "min_separation": Param("float", 4.0, "minimum separation of peaks, deg",
-                                check=lambda v: None if v >= 0 else "must be >= 0"),
+                                check=lambda v: None if v >= 0 else "must be >= 0", unit="deg"),
         "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
         "max_lines": Param("int", 16, "lines per snapshot", check=positive),
-        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
-        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
+        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive, unit="bins"),
+        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins", unit="bins"),
         "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
-                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive,
+                     unit="sample units"),
     }
 
     def validate(self) -> None:
