@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from arrayproc.config import Param
-from arrayproc.errors import ConfigError
+from arrayproc.config import Param, Schema
 
 __all__ = ["Component", "Param"]
 
@@ -24,21 +23,7 @@ class Component:
     params: ClassVar[dict[str, Param]] = {}
 
     def __init__(self, **kwargs: Any) -> None:
-        declared = self.all_params()
-        for key in kwargs:
-            if key not in declared:
-                raise ConfigError(f"{self.name}: unknown parameter {key!r} (one of "
-                                  f"{', '.join(declared) or 'none'})")
-        for key, p in declared.items():
-            if key in kwargs:
-                value = kwargs[key]
-                if value is not None or p.default is not None:
-                    value = p.convert(f"{self.name}.{key}", value)
-            elif p.required:
-                raise ConfigError(f"{self.name}: parameter {key!r} is required")
-            else:
-                value = p.default
-            setattr(self, key, value)
+        Schema(self.all_params()).apply(self, kwargs, self.name)
         self._setup()
 
     @classmethod
