@@ -8,6 +8,7 @@ when imported, and the application layer imports them (:func:`arrayproc.stages.l
 from __future__ import annotations
 
 import inspect
+import re
 import sys
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
@@ -122,11 +123,17 @@ def register(cls: type[Stage]) -> type[Stage]:
     """
     if not cls.kind:
         raise TypeError(f"{cls.__name__} has no kind")
-    doc = inspect.getdoc(cls) or ""
-    cls.params = Schema(cls.params, doc.split("\n\n")[0].replace("\n", " "))
+    cls.params = Schema(cls.params, _summary(cls))
     _document(cls)
     STAGES[cls.kind] = cls
     return cls
+
+
+def _summary(cls: type[Stage]) -> str:
+    """The first paragraph of the class docstring, without its pointer to the module doc."""
+    first = (inspect.getdoc(cls) or "").split("\n\n")[0].replace("\n", " ")
+    first = re.sub(r"\s*(;\s*|\()see (the )?module doc(string)?\)?", "", first).rstrip(".")
+    return first + "." if first else ""
 
 
 def _document(cls: type[Stage]) -> None:
