@@ -78,9 +78,11 @@ class Bearings(Stage):
                       unit="Hz"),
         "broadband": Param("bool", True, "pick peaks on the broadband (BTR) beam power"),
         "lines": Param("bool", False, "pick peaks on narrowband (LOFAR) lines"),
-        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB",
+        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median over "
+                              "beams, dB",
                               unit="dB"),
-        "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB",
+        "line_threshold_db": Param("float", 10.0, "line threshold over the TPSW background (and "
+                                   "over the beam row's median), dB",
                                    unit="dB"),
         "line_dynamic_db": Param("float", 10.0, "line peaks more than this below the line's "
                                  "strongest peak are taken for its sidelobes, dB",

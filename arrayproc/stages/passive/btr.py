@@ -30,7 +30,8 @@ class BTR(Stage):
     kind = "btr"
     accepts = frozenset({Domain.POWER})
     params = {
-        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins)", unit="Hz"),
+        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins); "
+                      "products btr", unit="Hz"),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
                      "1 µPa for data in Pa, full scale for data in FS)", check=positive,
                      unit="sample units"),

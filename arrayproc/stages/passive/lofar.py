@@ -51,10 +51,12 @@ class LOFAR(Stage):
     kind = "lofar"
     accepts = frozenset({Domain.POWER})
     params = {
-        "beams": Param("any", "all", "\"all\" or a list of cone angles, deg",
+        "beams": Param("any", "all", "\"all\" or a list of cone angles (the nearest "
+                       "beams), deg; products lofar",
                        check=_beams_check, unit="deg"),
         "band": Param("band", None, "[lo, hi] Hz shown (default: all input bins)", unit="Hz"),
-        "normalise": Param("str", "tpsw", "background normalisation",
+        "normalise": Param("str", "tpsw", "background normalisation: tpsw (level over the "
+                           "two-pass split-window background, dB) or none (dB re ref²)",
                            choices=("tpsw", "none")),
         "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive, unit="bins"),
         "tpsw_gap": Param("int", 3, "TPSW half-gap, bins", unit="bins"),
