@@ -289,9 +289,30 @@ def read_toml(path: str | os.PathLike, what: str) -> tuple[dict[str, Any], str]:
         raise ConfigError(f"{path}: cannot read {what} file ({e.strerror})") from None
     try:
         text = raw.decode()
-        return tomllib.loads(text), text
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+    except UnicodeDecodeError as e:
         raise ConfigError(f"{path}: invalid TOML ({e})") from None
+    return parse_toml(text, str(path)), text
+
+
+def parse_toml(text: str, where: str) -> dict[str, Any]:
+    """Parse TOML text (the one parse site of the package: every file goes through here once).
+
+    Parameters
+    ----------
+    text : str
+        The document.
+    where : str
+        The file (or ``"chain"`` for text given in Python), for the message.
+
+    Raises
+    ------
+    ConfigError
+        ``"{where}: invalid TOML (...)"``.
+    """
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"{where}: invalid TOML ({e})") from None
 
 
 class Table:

@@ -12,7 +12,7 @@ from typing import Any
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
-from arrayproc.config import Param, positive, read_toml, tomllib
+from arrayproc.config import Param, parse_toml, positive, read_toml
 from arrayproc.errors import ConfigError
 
 
@@ -35,10 +35,7 @@ INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=p
 def parse_chain(config: Mapping[str, Any] | str, text: str = "") -> tuple[Mapping[str, Any], str]:
     """A chain given as TOML text or as a parsed mapping, as ``(mapping, text)``."""
     if isinstance(config, str):
-        try:
-            return tomllib.loads(config), config
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"chain: invalid TOML ({e})") from None
+        return parse_toml(config, "chain"), config
     return config, text
 
 

@@ -58,13 +58,15 @@ def markdown_table() -> str:
     -------
     str
         A Markdown table: stage type (on its first row), key, type, default, unit and
-        description, one row per key, stage types in alphabetical order.
+        description, one row per key, the package's stage types (:data:`TYPES`) in
+        alphabetical order.
     """
     from arrayproc.chain.stage import STAGES
     from arrayproc.config import markdown_header
     load_all()
     rows = markdown_header(True, "stage")
-    for kind, cls in sorted(STAGES.items()):
+    for kind in sorted(TYPES):
+        cls = STAGES[kind]
         if cls.params:
             rows.append(cls.params.markdown(first=kind))
         else:
