@@ -181,7 +181,7 @@ _KINDS = [
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
-        # multi-target mode (track/multi.py)
+        # multi-target mode (track/multi/)
         "cone_deg": _c("deg", "cone angle of a bearing track's cone filter", False),
         "sigma_cone_deg": _c("deg", "1-sigma of cone_deg", False),
         "row": _c("", "measurement row used (index in its products group; -1 coasted)",

@@ -70,11 +70,6 @@ from arrayproc.track.models.level_bearing import LevelBearing
 from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 from arrayproc.track.state import Context
 
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
-
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
 _KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings",
@@ -82,11 +77,18 @@ _KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2
 
 
 def load_single_config(path: str) -> dict[str, Any]:
-    """Read and check a single-target tracker TOML; ConfigError naming the file and key."""
+    """Read (once) and check a single-target tracker TOML: :func:`check_single_config` of its
+    ``[tracker]`` table."""
     doc, _ = read_toml(path, "tracker")
-    if "tracker" not in doc or not isinstance(doc["tracker"], dict):
+    return check_single_config(doc.get("tracker"), path)
+
+
+def check_single_config(t: Any, path: str) -> dict[str, Any]:
+    """Check the ``[tracker]`` mapping of a single-target tracker (module doc) and fill in the
+    defaults; ConfigError naming the file ``path`` and the key."""
+    if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
-    cfg = dict(doc["tracker"])
+    cfg = dict(t)
     for k in cfg:
         if k not in _KEYS:
             raise ConfigError(f"{path}: unknown key tracker.{k}")
@@ -350,12 +352,14 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
 
 
 def run_single(products_path: str, config_path: str, out_path: str,
-               progress: bool = False) -> None:
-    """``arrayproc track`` with a single-target tracker (see the module doc)."""
+               progress: bool = False, cfg: dict[str, Any] | None = None) -> None:
+    """``arrayproc track`` with a single-target tracker (see the module doc); ``cfg`` the
+    checked configuration when the caller has read the file already."""
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.units import PASCAL, file_units, level_label
 
-    cfg = load_single_config(config_path)
+    if cfg is None:
+        cfg = load_single_config(config_path)
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
@@ -410,5 +414,5 @@ def run_single(products_path: str, config_path: str, out_path: str,
                  cov=Ps[sl, :4, :4], own_x=own[sl, 0], own_y=own[sl, 1])
 
 
-__all__ = ["run_single", "load_single_config", "track_bearings", "build_components",
-           "ownship_states", "assign_by_continuity"]
+__all__ = ["run_single", "load_single_config", "check_single_config", "track_bearings",
+           "build_components", "ownship_states", "assign_by_continuity"]

@@ -1,0 +1,134 @@
+"""The ``[tracker]`` keys of the multi-target tracker (``mode = "multi"``), checked on the
+parsed mapping (the file is read once, by the caller): the manager's keys, the measurement
+kinds' sub-tables (declared with :class:`arrayproc.config.Param`) and, through
+:func:`arrayproc.track.single.check_single_config`, the TMA filter's keys."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from arrayproc.config import Param, positive, read_toml
+from arrayproc.errors import ConfigError
+from arrayproc.track.manage.initiate import MofN
+
+__all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_multi_config"]
+
+MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
+              "hit_window",
+              "pd", "clutter_density", "bearing", "contacts", "positions"}
+
+
+def _f(default: float, doc: str) -> Param:
+    return Param("float", default, doc, check=positive)
+
+
+#: the sub-tables' keys (each number > 0)
+SUB_PARAMS: dict[str, dict[str, Param]] = {
+    "bearing": {
+        "space": Param("str", "bearing", "bearing (mirrored hypotheses) | cone",
+                       choices=("bearing", "cone")),
+        "sigma_cone_deg": _f(0.7, "cone-angle σ at broadside, deg"),
+        "q_cone": _f(0.05, "cone-acceleration noise (space = cone), deg²/s³"),
+        "q_bearing": _f(0.002, "bearing-acceleration noise (space = bearing), deg²/s³"),
+        "turn_ref_deg_s": _f(0.1, "Q × (1 + (heading rate / turn_ref)²), deg/s"),
+        "merge_deg": _f(4.0, "rows of a scan closer than this form one measurement, deg"),
+        "sigma_rate_deg_s": _f(0.5, "initial cone-rate σ, deg/s"),
+        "merge_d2": _f(4.0, "d² under which two confirmed tracks are duplicates"),
+        "min_sigma_sin": _f(0.2, "floor of sin θ in the noise widening"),
+    },
+    "contacts": {
+        "sigma_bearing_deg": _f(2.0, "bearing σ, deg"),
+        "sigma_range_m": _f(20.0, "range σ, m"),
+        "sigma_range_rate_mps": _f(0.3, "range-rate σ, m/s"),
+        "q": _f(0.01, "acceleration noise, m²/s³"),
+        "sigma_speed_mps": _f(5.0, "unobserved tangential speed at initiation, m/s"),
+        "mirror": Param("bool", True, "enter both candidate bearings of a line array"),
+        "moving_only": Param("bool", False, "only contacts flagged moving enter"),
+        "min_snr_db": Param("float", 0.0, "only contacts with snr_db at least this (> 0) enter",
+                            check=positive),
+    },
+    "positions": {
+        "q": _f(0.01, "acceleration noise, m²/s³"),
+        "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
+    },
+}
+
+
+def tracker_mode(tracker: Any) -> str:
+    """``mode`` of a parsed ``[tracker]`` table ("single" when absent)."""
+    return str(tracker.get("mode", "single")) if isinstance(tracker, dict) else "single"
+
+
+def _num(path: str, key: str, v: Any, lo: float = 0.0, strict: bool = True) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+            or v < lo or (strict and v == lo):
+        raise ConfigError(f"{path}: tracker.{key} must be a number "
+                          f"{'>' if strict else '>='} {lo}")
+    return float(v)
+
+
+
+def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Read (once) a multi-mode tracker TOML: :func:`check_multi_config` of its ``[tracker]``
+    table."""
+    doc, _ = read_toml(path, "tracker")
+    return check_multi_config(doc.get("tracker"), path)
+
+
+def _sub_table(path: str, sub: str, given: Any) -> dict[str, Any]:
+    if not isinstance(given, dict):
+        raise ConfigError(f"{path}: tracker.{sub} must be a table")
+    declared = SUB_PARAMS[sub]
+    for k in given:
+        if k not in declared:
+            raise ConfigError(f"{path}: unknown key tracker.{sub}.{k}")
+    return {k: p.convert(f"{path}: tracker.{sub}.{k}", given[k]) if k in given else p.default
+            for k, p in declared.items()}
+
+
+def check_multi_config(t: Any, path: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Check the ``[tracker]`` mapping of a multi-target tracker: (multi settings, the
+    single-mode keys for the TMA filter, checked by
+    :func:`arrayproc.track.single.check_single_config`)."""
+    from arrayproc.track.single import check_single_config
+    if not isinstance(t, dict):
+        raise ConfigError(f"{path}: missing [tracker] table")
+    multi = {k: t[k] for k in MULTI_KEYS if k in t}
+    single = {k: v for k, v in t.items() if k not in MULTI_KEYS}
+    cfg: dict[str, Any] = {"measurements": multi.get("measurements", "bearings"),
+                           "association": multi.get("association", "gnn")}
+    if cfg["measurements"] not in ("bearings", "contacts", "positions"):
+        raise ConfigError(f"{path}: tracker.measurements must be bearings, contacts or "
+                          f"positions, not {cfg['measurements']!r}")
+    if cfg["association"] not in ("gnn", "jpda"):
+        raise ConfigError(f"{path}: tracker.association must be gnn or jpda")
+    gp = _num(path, "gate_prob", multi.get("gate_prob", 0.999))
+    if gp >= 1:
+        raise ConfigError(f"{path}: tracker.gate_prob must be < 1")
+    cfg["gate_prob"] = gp
+    conf = multi.get("confirm", [3, 5])
+    if (not isinstance(conf, list) or len(conf) != 2
+            or not all(isinstance(v, int) and not isinstance(v, bool) for v in conf)
+            or not 1 <= conf[0] <= conf[1]):
+        raise ConfigError(f"{path}: tracker.confirm must be [M, N] integers, 1 <= M <= N")
+    cfg["confirm"] = MofN(conf[0], conf[1])
+    mm = multi.get("max_misses", 5)
+    if isinstance(mm, bool) or not isinstance(mm, int) or mm < 1:
+        raise ConfigError(f"{path}: tracker.max_misses must be an integer >= 1")
+    cfg["max_misses"] = mm
+    hw = multi.get("hit_window", None)
+    if hw is not None and (not isinstance(hw, list) or len(hw) != 2
+                           or not all(isinstance(v, int) and not isinstance(v, bool)
+                                      for v in hw) or not 1 <= hw[0] <= hw[1]):
+        raise ConfigError(f"{path}: tracker.hit_window must be [K, W] integers, 1 <= K <= W "
+                          "(delete a confirmed track with fewer than K hits in W scans)")
+    cfg["hit_window"] = hw
+    pd = _num(path, "pd", multi.get("pd", 0.9))
+    if pd > 1:
+        raise ConfigError(f"{path}: tracker.pd must be <= 1")
+    cfg["pd"] = pd
+    cfg["clutter_density"] = _num(path, "clutter_density", multi.get("clutter_density", 1e-3))
+    for sub in SUB_PARAMS:
+        cfg[sub] = _sub_table(path, sub, multi.get(sub, {}))
+    return cfg, check_single_config(single, path)
