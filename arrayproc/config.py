@@ -48,15 +48,16 @@ class Param:
     def required(self) -> bool:
         return self.default is _REQUIRED
 
-    def convert(self, where: str, value: Any) -> Any:
+    def convert(self, where: str, value: Any, sep: str = ": ") -> Any:
+        """The value checked and converted; a ConfigError ``where + sep + what is wrong``."""
         k = self.kind
-        bad = ConfigError(f"{where}: expected {k}, got {value!r}")
+        bad = ConfigError(f"{where}{sep}expected {k}, got {value!r}")
         if k == "float":
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise bad
             value = float(value)
             if not np.isfinite(value):
-                raise ConfigError(f"{where}: must be finite, got {value!r}")
+                raise ConfigError(f"{where}{sep}must be finite, got {value!r}")
         elif k == "int":
             if isinstance(value, bool) or not isinstance(value, int):
                 raise bad
@@ -72,18 +73,18 @@ class Param:
                 raise bad
             value = [float(v) for v in value]
             if k == "band" and (len(value) != 2 or not value[0] < value[1]):
-                raise ConfigError(f"{where}: expected [lo, hi] with lo < hi, got {value!r}")
+                raise ConfigError(f"{where}{sep}expected [lo, hi] with lo < hi, got {value!r}")
         elif k == "table":
             if not isinstance(value, Mapping):
                 raise bad
             value = dict(value)
         if self.choices is not None and value not in self.choices:
-            raise ConfigError(f"{where}: must be one of {', '.join(map(str, self.choices))}, "
+            raise ConfigError(f"{where}{sep}must be one of {', '.join(map(str, self.choices))}, "
                               f"got {value!r}")
         if self.check is not None:
             msg = self.check(value)
             if msg:
-                raise ConfigError(f"{where}: {msg}")
+                raise ConfigError(f"{where}{sep}{msg}")
         return value
 
 
@@ -158,7 +159,9 @@ class Schema(Mapping):
         where : str
             Start of every message: the file and table, or the stage (``"stage 'cbf'"``).
         prefix : str
-            Written before each key in messages (``"tma."`` gives ``'tma.window'``).
+            The table's dotted path, written before each key in messages: with a prefix
+            (``"tma."``) a message reads ``"{where}: tma.window must be >= 0, got -1.0"``,
+            without one ``"{where}: key 'window': must be >= 0, got -1.0"``.
         of : str
             Added after an unknown key's name (``" for type 'cbf'"``).
         allow : iterable of str
@@ -178,17 +181,22 @@ class Schema(Mapping):
         if not isinstance(values, Mapping):
             raise ConfigError(f"{where}: must be a table, got {values!r}")
         allowed = set(allow)
+
+        def name(key: str) -> str:
+            return prefix + key if prefix else repr(key)
+
         for key in values:
             if key not in self.params and key not in allowed:
-                raise ConfigError(f"{where}: unknown key {prefix + key!r}{of} "
+                raise ConfigError(f"{where}: unknown key {name(key)}{of} "
                                   f"(known: {', '.join(sorted(self.params)) or 'none'})")
         out: dict[str, Any] = {}
         for key, p in self.params.items():
             v = values.get(key)
             if key in values and (v is not None or p.default is not None):
-                out[key] = p.convert(f"{where}: key {prefix + key!r}", v)
+                out[key] = p.convert(f"{where}: {prefix}{key}" if prefix else
+                                     f"{where}: key {key!r}", v, sep=" " if prefix else ": ")
             elif p.required:
-                raise ConfigError(f"{where}: missing required key {prefix + key!r}")
+                raise ConfigError(f"{where}: missing required key {name(key)}")
             else:
                 out[key] = p.default
         return out

@@ -69,6 +69,7 @@ from arrayproc.track.models.bearing import Bearing
 from arrayproc.track.models.level_bearing import LevelBearing
 from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 from arrayproc.track.state import Context
+from arrayproc.track.types import legacy_table
 
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
@@ -86,6 +87,7 @@ def load_single_config(path: str) -> dict[str, Any]:
 def check_single_config(t: Any, path: str) -> dict[str, Any]:
     """Check the ``[tracker]`` mapping of a single-target tracker (module doc) and fill in the
     defaults; ConfigError naming the file ``path`` and the key."""
+    t = legacy_table(t, path)
     if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
     cfg = dict(t)

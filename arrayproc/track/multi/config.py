@@ -1,4 +1,4 @@
-"""The ``[tracker]`` keys of the multi-target tracker (``mode = "multi"``), checked on the
+"""The ``[tracker]`` keys of the multi-target tracker (``type = "multi"``), checked on the
 parsed mapping (the file is read once, by the caller): the manager's keys, the measurement
 kinds' sub-tables (declared with :class:`arrayproc.config.Param`) and, through
 :func:`arrayproc.track.single.check_single_config`, the TMA filter's keys."""
@@ -8,9 +8,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from arrayproc.config import Param, positive, read_toml
+from arrayproc.config import Param, Schema, positive, read_toml
 from arrayproc.errors import ConfigError
 from arrayproc.track.manage.initiate import MofN
+from arrayproc.track.types import legacy_table
 
 __all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_multi_config"]
 
@@ -56,8 +57,10 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
 
 
 def tracker_mode(tracker: Any) -> str:
-    """``mode`` of a parsed ``[tracker]`` table ("single" when absent)."""
-    return str(tracker.get("mode", "single")) if isinstance(tracker, dict) else "single"
+    """``mode`` of a parsed ``[tracker]`` table ("single" when absent), written either way
+    (:mod:`arrayproc.track.types`)."""
+    t = legacy_table(tracker)
+    return str(t.get("mode", "single")) if isinstance(t, dict) else "single"
 
 
 def _num(path: str, key: str, v: Any, lo: float = 0.0, strict: bool = True) -> float:
@@ -79,12 +82,7 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
 def _sub_table(path: str, sub: str, given: Any) -> dict[str, Any]:
     if not isinstance(given, dict):
         raise ConfigError(f"{path}: tracker.{sub} must be a table")
-    declared = SUB_PARAMS[sub]
-    for k in given:
-        if k not in declared:
-            raise ConfigError(f"{path}: unknown key tracker.{sub}.{k}")
-    return {k: p.convert(f"{path}: tracker.{sub}.{k}", given[k]) if k in given else p.default
-            for k, p in declared.items()}
+    return Schema(SUB_PARAMS[sub]).check(given, path, prefix=f"tracker.{sub}.")
 
 
 def check_multi_config(t: Any, path: str) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -92,6 +90,7 @@ def check_multi_config(t: Any, path: str) -> tuple[dict[str, Any], dict[str, Any
     single-mode keys for the TMA filter, checked by
     :func:`arrayproc.track.single.check_single_config`)."""
     from arrayproc.track.single import check_single_config
+    t = legacy_table(t, path)
     if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
     multi = {k: t[k] for k in MULTI_KEYS if k in t}
