@@ -64,6 +64,23 @@ def cone_angles(rec, t: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
+def relative_bearings(rec, t: np.ndarray) -> dict[str, np.ndarray]:
+    """True relative bearing (deg, (−180, 180], clockwise from the array's forward axis, port
+    negative) of each source at times t (s), horizontal, at emission time: the axis of the
+    beams of ``lr_cbf``."""
+    t = np.asarray(t, float)
+    out = {}
+    _, hd, _, _ = rec.nav.at(t)
+    h = np.deg2rad(hd)
+    fwd = np.stack([np.sin(h), np.cos(h)], -1)  # body x in the world (x east, y north)
+    stbd = np.stack([np.cos(h), -np.sin(h)], -1)  # body y (starboard)
+    for name, s in sources(rec).items():
+        _, d = _geometry(rec, s, t)
+        out[name] = np.rad2deg(np.arctan2(np.sum(d[:, :2] * stbd, axis=1),
+                                          np.sum(d[:, :2] * fwd, axis=1)))
+    return out
+
+
 def tonal_frequencies(rec, t: np.ndarray, dt: float = 0.5) -> dict[str, np.ndarray]:
     """Received (Doppler-shifted) frequency of each source's tonals at times t: (n_t, n_tonals)
     Hz, ``f (1 − dτ/dt)`` with τ the emission-time propagation delay."""

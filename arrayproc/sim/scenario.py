@@ -19,7 +19,7 @@ from arrayproc.config import read_toml
 from arrayproc.dsp.fracdelay import PASSBAND
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
-from arrayproc.io.geometry import line_array
+from arrayproc.io.geometry import line_array, triplet_array, twin_line_array
 
 
 def _speed(t: _Table, required: bool = True) -> float | None:
@@ -302,11 +302,18 @@ def parse_scenario(data: dict, file: str = "<scenario>",
 
     # array
     at = root.sub("array", required=True)
-    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron"))
-    if kind == "line":
+    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron", "twin",
+                                             "triplet"))
+    if kind in ("line", "twin", "triplet"):
         n = at.int_("n", required=True, minimum=1)
         spacing = at.num("spacing", required=True, positive=True)
-        pos = line_array(n, spacing)
+        if kind == "twin":
+            pos = twin_line_array(n, spacing, at.num("separation", required=True,
+                                                     positive=True))
+        elif kind == "triplet":
+            pos = triplet_array(n, spacing, at.num("radius", required=True, positive=True))
+        else:
+            pos = line_array(n, spacing)
     elif kind == "tetrahedron":
         pos = tetrahedron(at.num("side", required=True, positive=True))
     else:

@@ -158,7 +158,7 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
     if level is not None and level not in g:
         raise FormatError(f"{products_path}: bearings column {level!r} (tracker.level) is "
                           "missing")
-    names = ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db")
+    names = ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db", "side")
     cols = {k: np.asarray(g[k], float).reshape(-1) for k in
             names + ((level,) if level and level not in names else ()) if k in g}
     if any(v.shape != t.shape for v in cols.values()):
@@ -389,7 +389,10 @@ def run_single(products_path: str, config_path: str, out_path: str,
     own, hd = ownship_states(_read_nav(rec), t)
     port = np.deg2rad(b["bearing_port_deg"])
     stbd = np.deg2rad(b["bearing_stbd_deg"])
-    if cfg["lr"]:
+    side = b.get("side")
+    if side is not None and np.all(np.abs(side) == 1.0):
+        zs = stbd[:, None]  # resolved by port/starboard beams: the one true bearing per row
+    elif cfg["lr"]:
         zs = assign_by_continuity(port, stbd)
     else:
         zs = (port if cfg["side"] == "port" else stbd)[:, None]

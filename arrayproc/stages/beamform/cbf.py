@@ -117,6 +117,28 @@ def symmetric_pairs(rel: np.ndarray, weights: np.ndarray,
     return np.flatnonzero(keep), match[keep]
 
 
+def check_frame_keys(stage: Stage) -> None:
+    """The checks of the keys ``cbf`` shares with the frequency-domain beamformers (``hop``,
+    ``threads``, ``band``, ``beams``): ``hop = 0`` becomes nfft/2, a hop beyond nfft warns,
+    and ``stage.beam_axis``, ``stage._dirs``, ``stage.beam_mode`` are set from ``beams``."""
+    w = f"stage {stage.name!r}"
+    if stage.hop == 0:
+        stage.hop = max(1, stage.nfft // 2)
+    if not 0 < stage.hop:
+        raise ConfigError(f"{w}: key 'hop' must be > 0, got {stage.hop}")
+    if stage.hop > stage.nfft:  # allowed (sparse snapshots), but never silently
+        warnings.warn(f"{w}: key 'hop' ({stage.hop}) exceeds 'nfft' ({stage.nfft}): each "
+                      f"snapshot skips {stage.hop - stage.nfft} samples", stacklevel=3)
+    if stage.threads < 0:
+        raise ConfigError(f"{w}: key 'threads' must be >= 0, got {stage.threads}")
+    if stage.band is not None and stage.band[0] < 0:
+        raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {stage.band}")
+    try:
+        stage.beam_axis, stage._dirs, stage.beam_mode = beam_directions(stage.beams)
+    except ConfigError as e:
+        raise ConfigError(f"{w}: {e}") from None
+
+
 @register
 class CBF(Stage):
     """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
@@ -151,22 +173,7 @@ class CBF(Stage):
     }
 
     def validate(self) -> None:
-        w = f"stage {self.name!r}"
-        if self.hop == 0:
-            self.hop = max(1, self.nfft // 2)
-        if not 0 < self.hop:
-            raise ConfigError(f"{w}: key 'hop' must be > 0, got {self.hop}")
-        if self.hop > self.nfft:  # allowed (sparse snapshots), but never silently
-            warnings.warn(f"{w}: key 'hop' ({self.hop}) exceeds 'nfft' ({self.nfft}): each "
-                          f"snapshot skips {self.hop - self.nfft} samples", stacklevel=2)
-        if self.threads < 0:
-            raise ConfigError(f"{w}: key 'threads' must be >= 0, got {self.threads}")
-        if self.band is not None and self.band[0] < 0:
-            raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {self.band}")
-        try:
-            self.beam_axis, self._dirs, self.beam_mode = beam_directions(self.beams)
-        except ConfigError as e:
-            raise ConfigError(f"{w}: {e}") from None
+        check_frame_keys(self)
         self._unique, self._uidx, self._sign = pair_directions(self._dirs)
         self._runs = kb.beam_runs(self._uidx, self._sign)
         self._win = time_taper(self.window, self.nfft).astype(np.float32)

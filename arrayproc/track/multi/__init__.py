@@ -65,9 +65,9 @@ from arrayproc.track.multi.config import (
 from arrayproc.track.multi.contacts import contact_scans, contacts_manager, drop_twin_births
 from arrayproc.track.multi.positions import positions_manager
 from arrayproc.track.multi.run import confirmed_status, multi_target, run_multi
-from arrayproc.track.multi.tma import tma_track
+from arrayproc.track.multi.tma import resolved_side, tma_track
 
 __all__ = ["run_multi", "tracker_mode", "split_config", "check_multi_config", "multi_target",
            "bearing_scans", "cone_filter", "track_cones", "tma_track", "contact_scans",
            "contacts_manager", "drop_twin_births", "positions_manager", "confirmed_status",
-           "compose_manager", "MULTI_KEYS", "SUB_PARAMS"]
+           "compose_manager", "MULTI_KEYS", "SUB_PARAMS", "resolved_side"]

@@ -96,6 +96,8 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
     g = _group(prod, "bearings", products_path, tma_cfg.get("bearings"))
     b = _columns(g, ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg"),
                  products_path)
+    if "side" in g:  # relative-bearing beams (lr_cbf): the side each row was resolved to
+        b["side"] = np.asarray(g["side"], float)
     score = np.asarray(g.get("snr_db", g.get("level_db", np.zeros_like(b["time"]))), float)
     ok = np.isfinite(b["time"]) & np.isfinite(b["cone_deg"])
     if "cone_gate" in tma_cfg:

@@ -11,14 +11,26 @@ import numpy as np
 from arrayproc.geo.nav import Nav
 from arrayproc.track.manage.tracks import Track
 
-__all__ = ["tma_track"]
+__all__ = ["tma_track", "resolved_side"]
+
+
+def resolved_side(side: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
+    """The sides (+1 starboard, −1 port) of the rows ``rows`` when every one was resolved by
+    port/starboard-resolving beams (``bearings`` column ``side``, whose resolved rows hold the
+    one true bearing in both bearing columns), else None (ambiguous: mirror hypotheses)."""
+    if side is None:
+        return None
+    s = np.asarray(side, float)[rows]
+    return s if s.size and np.all(np.abs(s) == 1.0) else None
+
 
 def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, Any],
               by_side: bool = False) -> dict[str, np.ndarray] | None:
     """TMA of one cone track: its rows' port/starboard bearings through the configured filter
     (UKF with left-right resolution by default) from its first row — the two hypotheses fed
     by side (``by_side``, starboard and port members) or by continuity
-    (:func:`~arrayproc.track.single.assign_by_continuity`); between rows (coasting)
+    (:func:`~arrayproc.track.single.assign_by_continuity`), or one hypothesis when every row
+    was resolved to its side by the beams (:func:`resolved_side`); between rows (coasting)
     the state is predicted with constant velocity. Returns the rows to write, or None when the
     track has fewer than two rows."""
     from arrayproc.track.single import assign_by_continuity, ownship_states, track_bearings
@@ -33,7 +45,10 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
     own, hd = ownship_states(nav, t)
     port = np.deg2rad(b["bearing_port_deg"][r])
     stbd = np.deg2rad(b["bearing_stbd_deg"][r])
-    if tma_cfg["lr"] and by_side:
+    side = resolved_side(b.get("side"), r)
+    if side is not None:  # every row resolved to its side by the beams: no mirror hypothesis
+        zs = stbd[:, None]
+    elif tma_cfg["lr"] and by_side:
         zs = np.stack([stbd, port], 1)  # hypothesis 0 starboard, 1 port, as in the cone track
     elif tma_cfg["lr"]:
         zs = assign_by_continuity(port, stbd)
@@ -53,6 +68,8 @@ def tma_track(tr: Track, b: dict[str, np.ndarray], nav: Nav, tma_cfg: dict[str, 
     if zs.shape[1] == 2:
         on_stbd = np.isclose(np.cos(zs[:n_ok, 0] - stbd[:n_ok]), 1.0)
         side_w = np.where(on_stbd, ws[:n_ok, 0], ws[:n_ok, 1])
+    elif side is not None:
+        side_w = (side[:n_ok] > 0).astype(float)
     else:
         side_w = np.full(n_ok, 1.0 if tma_cfg["side"] == "starboard" else 0.0)
     # every history point: the TMA state at its row, or predicted from the latest row
