@@ -9,6 +9,7 @@ straight onto components.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, ClassVar
 
 from arrayproc.config import Param, Schema
@@ -25,6 +26,19 @@ class Component:
     def __init__(self, **kwargs: Any) -> None:
         Schema(self.all_params()).apply(self, kwargs, self.name)
         self._setup()
+
+    def __init_subclass__(cls, **kw: Any) -> None:
+        """Give each component class the signature and a numpydoc ``Parameters`` section of
+        its declared parameters (``help(UKF)``, ``inspect.signature(UKF)``)."""
+        super().__init_subclass__(**kw)
+        schema = Schema(cls.all_params())
+        if "__init__" in cls.__dict__:
+            cls.__signature__ = None  # type: ignore[attr-defined]  # its own, not a base's
+        elif schema:
+            cls.__signature__ = schema.signature()  # type: ignore[attr-defined]
+            doc = inspect.cleandoc(cls.__doc__ or "")
+            if "Parameters\n----------" not in doc:
+                cls.__doc__ = (doc + "\n\n" + schema.numpydoc()).lstrip()
 
     @classmethod
     def all_params(cls) -> dict[str, Param]:
