@@ -114,7 +114,17 @@ def cmd_stages(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub) -> None:
-    """Add ``arrayproc stages [TYPE]``."""
+    """Add ``arrayproc stages [TYPE]``, and say in the help of every argument of
+    :data:`SHIPPED` that it also takes a shipped file's name (this module is listed after the
+    other command modules, so their parsers exist)."""
+    for (cmd, dest), (folder, what) in SHIPPED.items():
+        parser = sub.choices.get(cmd)
+        names = shipped_names(folder)
+        shown = ", ".join(names) if len(names) <= 12 else "see arrayproc data-dir"
+        for action in getattr(parser, "_actions", []):
+            if action.dest == dest and "shipped" not in (action.help or ""):
+                action.help = (action.help or f"{what} TOML file") + \
+                    f", or the name of a shipped one ({shown})"
     s = sub.add_parser("stages", help="list the chain stage types, or one type's keys")
     s.add_argument("type", nargs="?", metavar="TYPE",
                    help="a stage type: print its keys with type, default, unit and doc")

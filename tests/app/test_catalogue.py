@@ -113,3 +113,11 @@ def test_help_of_cbf_lists_keys_not_values():
     assert "**values" not in text
     assert "nfft : int, default 2048, samples" in text
     assert "band : [lo, hi], optional, Hz" in text
+
+
+def test_help_says_a_shipped_name_is_accepted(capsys):
+    for cmd in ("process", "track", "tma", "simulate", "batch"):
+        with pytest.raises(SystemExit):
+            main([cmd, "--help"])
+        out = " ".join(capsys.readouterr().out.split())
+        assert "or the name of a shipped one" in out, cmd
