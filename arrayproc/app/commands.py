@@ -145,19 +145,15 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
     if follow and not (math.isfinite(idle_s) and idle_s > 0):
         raise ConfigError(f"--idle must be a number of seconds > 0, got {idle_s}")
     from arrayproc.app.resources import check_chain_memory
-    from arrayproc.config import tomllib
+    from arrayproc.config import read_toml
     from arrayproc.io.recording import Recording
-    try:
-        with open(chain, "rb") as fh:
-            raw = tomllib.loads(fh.read().decode())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        raw = None  # load_chain below names the problem
     with Recording(recording, positions=positions, nan=nan, swmr=follow) as r:
-        if raw is not None:  # before any stage is built: parameters can ask for terabytes
-            check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
-        from arrayproc.app.api import load_chain, run_chain
+        raw, text = read_toml(chain, "chain")  # read once
+        # before any stage is built: parameters can ask for terabytes
+        check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
+        from arrayproc.app.api import chain_from_toml, run_chain
         from arrayproc.io.products import ProductsWriter
-        spec = load_chain(chain)  # validated before any data is read
+        spec = chain_from_toml(raw, text, chain)  # validated before any data is read
         if follow:
             n = _follow(r, spec, recording, output, idle_s, warn, stats)
         else:

@@ -1,10 +1,12 @@
 """``arrayproc track``: one entry for every tracker configuration.
 
 The tracker TOML is read once (:func:`arrayproc.config.read_toml`) and its ``[tracker]`` mapping
-dispatched: ``mode = "single"`` (the default; the papers' reproductions) runs the single-target
-bearings tracker of :mod:`arrayproc.track.single`; ``mode = "multi"`` runs the track manager
-over every contact (:mod:`arrayproc.track.multi`), or with ``measurements = "delays"`` the
-recursive TDOA position tracker (:mod:`arrayproc.track.delays`). Each runner is a thin
+dispatched on its ``type`` (:mod:`arrayproc.track.types`): ``type = "single"`` (the default;
+the papers' reproductions) runs the single-target bearings tracker of
+:mod:`arrayproc.track.single`; ``type = "multi"`` runs the track manager over every contact
+(:mod:`arrayproc.track.multi`); ``type = "delays"`` the recursive TDOA position tracker
+(:mod:`arrayproc.track.delays`). The older ``mode = "multi"`` (with ``measurements =
+"delays"`` for the TDOA tracker) still means the same. Each runner is a thin
 composition of the parts (models, filters, the hypothesis bank, the manager's associator,
 initiator, confirmer and deleter) that a user can also put together in Python; this module
 only dispatches, so neither runner imports the other's entry point (no import cycle).
@@ -16,8 +18,8 @@ from typing import Any
 
 from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError
-from arrayproc.track.delays import check_delays_config, is_delays_config, run_delays
-from arrayproc.track.multi import check_multi_config, run_multi, tracker_mode
+from arrayproc.track.delays import check_delays_config, run_delays
+from arrayproc.track.multi import check_multi_config, run_multi
 from arrayproc.track.single import (  # noqa: F401  (re-exported for callers of the runner)
     _read_bearings,
     assign_by_continuity,
@@ -27,6 +29,7 @@ from arrayproc.track.single import (  # noqa: F401  (re-exported for callers of 
     run_single,
     track_bearings,
 )
+from arrayproc.track.types import tracker_type
 
 
 def check_tracker_config(t: Any, path: str) -> dict[str, Any]:
@@ -50,14 +53,16 @@ def check_tracker_config(t: Any, path: str) -> dict[str, Any]:
     ConfigError
         Naming the file and the key.
     """
-    mode = tracker_mode(t)
-    if mode == "multi" and is_delays_config(t):  # the TDOA tracker (track/delays)
-        return check_delays_config(t, path)
-    if mode == "multi":  # the multi-target keys, then the TMA filter's
+    kind = tracker_type(t, path)
+    if kind == "delays":  # the TDOA tracker (track/delays)
+        return {**check_delays_config(t, path), "type": kind}
+    if kind == "multi":  # the multi-target keys, then the TMA filter's
         multi, tma = check_multi_config(t, path)
-        return {**tma, "mode": "multi", "multi": multi}
-    if mode != "single":
-        raise ConfigError(f"{path}: tracker.mode must be 'single' or 'multi', not {mode!r}")
+        return {**tma, "mode": "multi", "multi": multi, "type": kind}
+    if kind != "single":
+        raise ConfigError(f"{path}: tracker.mode must be 'single' or 'multi', not {kind!r} "
+                          "(or name the tracker with tracker.type = 'single', 'multi' or "
+                          "'delays')")
     return check_single_config(t, path)
 
 

@@ -53,18 +53,19 @@ class ActiveBeams(Stage):
     produces = Domain.BEAM_TIME
     params = {
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+                       "cone angles {start, stop, count} or {bearings, elevations}, deg",
+                       unit="deg"),
         "window_s": Param("float", 0.0, "receive window after each transmission, s (0: up to "
-                          "the next transmission)"),
+                          "the next transmission)", unit="s"),
         "band": Param("band", None, "[lo, hi] Hz kept as complex baseband (default: the "
-                      "waveform's main lobe widened by the Doppler of +-15 m/s)"),
+                      "waveform's main lobe widened by the Doppler of +-15 m/s)", unit="Hz"),
         "shading": Param("str", "hann", "array shading", choices=("none", "hann", "hamming")),
         "threads": Param("int", 0, "FFT and beamforming threads (0: all cores)"),
         "blank_direct": Param("any", False, "zero each element's samples during the direct "
                               "arrival of the ping (projector offset from /active): true, "
                               "false, or a list of waveform names or kinds, e.g. [\"bpsk\"]"),
         "blank_margin_s": Param("float", 0.02, "extra time blanked before and after the "
-                                "direct arrival, s"),
+                                "direct arrival, s", unit="s"),
     }
 
     def validate(self) -> None:

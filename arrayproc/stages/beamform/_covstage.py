@@ -31,12 +31,12 @@ from arrayproc.stages.beamform.cbf import WINDOWS, check_frame_keys
 BINS_PER_THREAD = 64
 
 COMMON = {
-    "nfft": Param("int", 1024, "samples per snapshot (DFT length)", check=positive),
-    "hop": Param("int", 0, "samples between snapshots (0: nfft/2)"),
+    "nfft": Param("int", 1024, "samples per snapshot (DFT length)", check=positive, unit="samples"),
+    "hop": Param("int", 0, "samples between snapshots (0: nfft/2)", unit="samples"),
     "window": Param("str", "hann", "time taper of each snapshot", choices=WINDOWS),
-    "band": Param("band", None, "[lo, hi] Hz of the bins (default: all)"),
+    "band": Param("band", None, "[lo, hi] Hz of the bins (default: all)", unit="Hz"),
     "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                   "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+                   "cone angles {start, stop, count} or {bearings, elevations}, deg", unit="deg"),
     "snapshots": Param("int", 32, "snapshots per covariance estimate (disjoint groups)",
                        check=positive),
     "output": Param("str", "bins", "per-bin power or its sum over the bins",

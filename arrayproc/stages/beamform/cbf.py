@@ -147,15 +147,25 @@ class CBF(Stage):
     accepts = frozenset({Domain.TIME})
     produces = Domain.BEAMS
     params = {
-        "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive),
-        "hop": Param("int", 0, "samples between snapshots (0: nfft/2)"),
+        "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive,
+                      unit="samples"),
+        "hop": Param("int", 0, "samples between snapshots (0: nfft/2)", unit="samples"),
         "window": Param("str", "hann", "time taper of each snapshot", choices=WINDOWS),
-        "band": Param("band", None, "[lo, hi] Hz of the bins to beamform (default: all)"),
+        "band": Param("band", None, "[lo, hi] Hz of the bins to beamform (default: all); "
+                      "an upper edge above the input's Nyquist frequency (fs/2, or fc + fs/2 for "
+                      "complex baseband) is refused; a band above the array's spatial-aliasing "
+                      "limit c/(2d) gets a warning",
+                      unit="Hz"),
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+                       "cone angles {start, stop, count} (spacing = \"angle\" "
+                       "or \"cos\"), or {bearings, elevations}: every combination of a bearing "
+                       "relative to the array's forward axis and an elevation above the "
+                       "horizontal, deg",
+                       unit="deg"),
         "shading": Param("str", "none", "array shading", choices=SHADINGS),
-        "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB",
-                             check=positive),
+        "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB "
+                             "below the main lobe",
+                             check=positive, unit="dB"),
         "batch": Param("int", 32, "snapshots per GEMM batch (and per output block)",
                        check=positive),
         "threads": Param("int", 0, "worker threads, each on a part of the batch's snapshots "

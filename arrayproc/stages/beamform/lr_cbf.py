@@ -133,13 +133,15 @@ class LRCBF(Stage):
     params = {
         **{k: COMMON[k] for k in ("nfft", "hop", "window", "band", "snapshots", "threads")},
         "beams": Param("table", {"start": -179.0, "stop": 180.0, "count": 360},
-                       "relative bearings {start, stop, count}, deg in (-180, 180]"),
-        "weights": Param("str", "cardioid", "das, cardioid or adaptive (MVDR)",
+                       "relative bearings {start, stop, count}, deg in (-180, 180]", unit="deg"),
+        "weights": Param("str", "cardioid", "das (delay-and-sum), cardioid (unit response at β, "
+                         "null at −β) or adaptive (MVDR on these beams)",
                          choices=("das", "cardioid", "adaptive")),
         "wng_loss_db": Param("float", 10.0, "cardioid: largest loss of white-noise gain "
                              "against delay-and-sum, dB (the null is made shallower beyond)",
-                             check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
-        "wng_db": Param("float", None, "adaptive: white-noise-gain floor, dB (as mvdr)"),
+                             check=lambda v: None if v >= 0 else f"must be >= 0, got {v}",
+                             unit="dB"),
+        "wng_db": Param("float", None, "adaptive: white-noise-gain floor, dB (as mvdr)", unit="dB"),
         "loading": Param("float", 0.01, "adaptive: diagonal loading re the mean element power",
                          check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
         "batch": Param("int", 32, "snapshots per output block (das, cardioid)", check=positive),

@@ -53,7 +53,8 @@ class MUSIC(CovarianceStage):
     kind = "music"
     params = {
         **COMMON,
-        "sources": Param("any", "mdl", "number of sources, or 'mdl' / 'aic' per bin",
+        "sources": Param("any", "mdl", "number of sources, or 'mdl' / 'aic' per bin (needs "
+                         "snapshots >= elements)",
                          check=_sources),
         "max_sources": Param("int", 8, "cap on the estimated number of sources",
                              check=positive),

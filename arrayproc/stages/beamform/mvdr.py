@@ -57,14 +57,14 @@ class MVDR(CovarianceStage):
     kind = "mvdr"
     params = {
         **COMMON,
-        "loading": Param("float", 0.01, "diagonal loading ε relative to the mean element "
-                         "power tr(R)/N", check=_nonneg),
+        "loading": Param("float", 0.01, "diagonal loading ε: δ = ε·tr(R)/N, relative to the "
+                         "mean element power", check=_nonneg),
         "wng_db": Param("float", None, "white-noise-gain floor, dB (<= 10 log10 N): loading "
-                        "raised per beam until reached"),
+                        "raised per beam until reached", unit="dB"),
         "forward_backward": Param("bool", False, "forward-backward averaging "
                                   "(centro-symmetric arrays)"),
-        "power": Param("str", "capon", "Capon estimate N²/a^H R⁻¹ a, or the loaded beam's "
-                       "output power N² w^H R w", choices=("capon", "output")),
+        "power": Param("str", "capon", "capon (N²/a^H R_δ⁻¹ a) or output (the loaded "
+                       "beam's output power N² w^H R w)", choices=("capon", "output")),
     }
 
     def prepare(self, positions: np.ndarray, freqs: np.ndarray) -> None:

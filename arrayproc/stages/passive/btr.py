@@ -32,9 +32,11 @@ class BTR(Stage):
     kind = "btr"
     accepts = frozenset({Domain.POWER})
     params = {
-        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins)"),
+        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins); "
+                      "products btr", unit="Hz"),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
-                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive,
+                     unit="sample units"),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:

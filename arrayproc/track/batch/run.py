@@ -82,11 +82,12 @@ import math
 import os
 import sys
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from arrayproc.config import Param, positive, read_toml, resolve_beside
+from arrayproc.config import Param, Schema, positive, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, delays_columns, read_products
 from arrayproc.io.recording import Recording
@@ -114,7 +115,7 @@ def _gate(v: Any) -> str | None:
         "must be [lo, hi] cone angles, deg, 0 <= lo < hi <= 180"
 
 
-PARAMS: dict[str, Param] = {
+PARAMS = Schema({
     "method": Param("str", doc="bearings | delays | compact",
                     choices=("bearings", "delays", "compact")),
     "window": Param("float", 0.0, "s per solution; 0: the whole file", check=_non_negative),
@@ -152,7 +153,7 @@ PARAMS: dict[str, Param] = {
                             "planar model", check=_non_negative),
     "delay_correlation": Param("float", None, "delays: within-snapshot correlation in [0, 1); "
                                "absent: estimated", check=_unit_interval),
-}
+}, "a TMA solution ([tma] table)")
 
 
 def load_tma_config(path: str) -> dict[str, Any]:
@@ -169,20 +170,27 @@ def load_tma_config(path: str) -> dict[str, Any]:
         Every key of :data:`PARAMS`, defaults filled in.
     """
     doc, _ = read_toml(path, "TMA")
-    if not isinstance(doc.get("tma"), dict):
+    return tma_config(doc, path)
+
+
+def tma_config(doc: Mapping[str, Any], path: str) -> dict[str, Any]:
+    """Check a parsed TMA document (its ``[tma]`` table) against :data:`PARAMS`.
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed TOML.
+    path : str
+        Its file, for the messages.
+
+    Returns
+    -------
+    dict
+        Every key of :data:`PARAMS`, defaults filled in.
+    """
+    if not isinstance(doc.get("tma"), Mapping):
         raise ConfigError(f"{path}: missing [tma] table")
-    raw = doc["tma"]
-    cfg: dict[str, Any] = {}
-    for k in raw:
-        if k not in PARAMS:
-            raise ConfigError(f"{path}: unknown key tma.{k}")
-    for k, p in PARAMS.items():
-        if k in raw:
-            cfg[k] = p.convert(f"{path}: tma.{k}", raw[k])
-        elif p.required:
-            raise ConfigError(f"{path}: missing key tma.{k}")
-        else:
-            cfg[k] = p.default
+    cfg = PARAMS.check(doc["tma"], path, prefix="tma.")
     if cfg["method"] == "compact" and cfg["speed_mps"] is None:
         raise ConfigError(f"{path}: tma.speed_mps is required for method = 'compact'")
     if cfg["min_range_m"] >= cfg["max_range_m"]:

@@ -54,8 +54,7 @@ normalised innovation exceeds the χ² quantile for every hypothesis is skipped.
 Config (``arrayproc track DELAYS.h5 -c TRACKER.toml``)::
 
     [tracker]
-    mode = "multi"
-    measurements = "delays"
+    type = "delays"           # (older form: mode = "multi", measurements = "delays")
     filter = "ukf"            # ekf | ukf | ckf | ghf
     nav = "rec.h5"            # optional: recording with /nav and the array (default: source)
     [tracker.params]          # filter parameters (alpha/beta/kappa, gh_order)

@@ -6,38 +6,72 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from arrayproc.config import read_toml
+from arrayproc.config import Param, Schema, positive, read_toml
 from arrayproc.errors import ConfigError
 from arrayproc.track.filters import make_filter
+from arrayproc.track.types import legacy_table
 
-__all__ = ["DELAYS_DEFAULTS", "GAUSSIAN_FILTERS", "is_delays_config", "load_delays_config",
-           "check_delays_config"]
+__all__ = ["DELAYS_PARAMS", "DELAYS_DEFAULTS", "GAUSSIAN_FILTERS", "is_delays_config",
+           "load_delays_config", "check_delays_config"]
 
 #: filters the delays tracker accepts (the SRF is bearings-only, the RPF not Gaussian)
 GAUSSIAN_FILTERS = ("ekf", "ukf", "ckf", "ghf")
 
-DELAYS_DEFAULTS: dict[str, Any] = {
-    "motion": "static", "q": 0.0, "range_m": 5000.0, "sigma_range_m": 3000.0,
-    "sigma_bearing_deg": 0.5, "sigma_speed_mps": 3.0, "side": "auto", "sigma_delay_s": 0.0,
-    "min_corr": 0.0, "source_dz_m": 0.0, "gate_prob": 0.0, "group": "", "range_bank": None,
-    "array_motion": True,
-}
+
+
+def _nonneg(v: Any) -> str | None:
+    return None if v >= 0 else f"must be a number >= 0, got {v}"
+
+
+def _range_bank(v: Any) -> str | None:
+    ok = (isinstance(v, list) and len(v) == 3
+          and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
+                  for a in v)
+          and 0 < v[0] < v[1] and isinstance(v[2], int) and v[2] >= 2)
+    return None if ok else ("must be [r_min, r_max, n] with 0 < r_min < r_max (m) and an "
+                            "integer n >= 2")
+
+
+#: the ``[tracker.delays]`` keys
+DELAYS_PARAMS = Schema({
+    "motion": Param("str", "static", "static (thesis eq. 3.40, Φ = I) or cv",
+                    choices=("static", "cv")),
+    "q": Param("float", 0.0, "process noise: static, m²/s position random walk; cv, m²/s³",
+               check=_nonneg),
+    "range_m": Param("float", 5000.0, "initial range prior along the first row's plane-wave "
+                     "bearing", check=positive, unit="m"),
+    "sigma_range_m": Param("float", 3000.0, "σ of the range prior", check=positive, unit="m"),
+    "sigma_bearing_deg": Param("float", 0.5, "lower bound of the initial bearing σ",
+                               check=positive, unit="deg"),
+    "sigma_speed_mps": Param("float", 3.0, "cv: initial velocity σ per axis", check=positive,
+                             unit="m/s"),
+    "side": Param("str", "auto", "auto (mirror hypotheses), port or starboard",
+                  choices=("auto", "port", "starboard")),
+    "sigma_delay_s": Param("float", 0.0, "> 0: this σ for every delay; 0: the product's sigma "
+                           "column", check=_nonneg, unit="s"),
+    "min_corr": Param("float", 0.0, "leave out delays with a lower peak correlation",
+                      check=lambda v: _nonneg(v) or (None if v <= 1 else "must be <= 1")),
+    "source_dz_m": Param("float", 0.0, "source depth below the reference hydrophone",
+                         unit="m"),
+    "gate_prob": Param("float", 0.0, "> 0: χ² gate on the innovations (0: no gate)",
+                       check=lambda v: _nonneg(v) or (None if v < 1 else
+                                                      "must be < 1 (0: no gate)")),
+    "group": Param("str", "", "delays group (default: the only one)"),
+    "range_bank": Param("any", None, "optional [r_min, r_max, n]: n range priors from r_min to "
+                        "r_max instead of range_m", check=_range_bank),
+    "array_motion": Param("bool", True, "delays brought back to a static array's (the array "
+                          "moves while the wavefront crosses it)"),
+}, "the recursive TDOA tracker ([tracker.delays] table)")
+DELAYS_DEFAULTS: dict[str, Any] = {k: p.default for k, p in DELAYS_PARAMS.items()}
 _TOP_KEYS = {"mode", "measurements", "filter", "nav", "params", "delays"}
 
 
 def is_delays_config(tracker: Any) -> bool:
     """True when a parsed ``[tracker]`` table reads ``mode = "multi"`` and
     ``measurements = "delays"`` (errors are left to the full validation)."""
+    tracker = legacy_table(tracker)
     return isinstance(tracker, dict) and tracker.get("mode") == "multi" \
         and tracker.get("measurements") == "delays"
-
-
-def _number(path: str, key: str, v: Any, positive: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-            or v < 0 or (positive and v == 0):
-        raise ConfigError(f"{path}: tracker.delays.{key} must be a number "
-                          f"{'>' if positive else '>='} 0")
-    return float(v)
 
 
 def load_delays_config(path: str) -> dict[str, Any]:
@@ -65,6 +99,7 @@ def check_delays_config(t: Any, path: str) -> dict[str, Any]:
         ``multi`` = {"measurements": "delays"} and ``delays`` (every key of
         :data:`DELAYS_DEFAULTS`, checked).
     """
+    t = legacy_table(t, path)
     if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
     for k in t:
@@ -84,39 +119,10 @@ def check_delays_config(t: Any, path: str) -> dict[str, Any]:
     given = t.get("delays", {})
     if not isinstance(given, dict):
         raise ConfigError(f"{path}: tracker.delays must be a table")
-    d = dict(DELAYS_DEFAULTS)
-    for k, v in given.items():
-        if k not in DELAYS_DEFAULTS:
-            raise ConfigError(f"{path}: unknown key tracker.delays.{k}")
-        if k in ("motion", "side", "group"):
-            choices = {"motion": ("static", "cv"), "side": ("auto", "port", "starboard")}
-            if not isinstance(v, str) or (k in choices and v not in choices[k]):
-                raise ConfigError(f"{path}: tracker.delays.{k} must be "
-                                  f"{' | '.join(choices.get(k, ('a group name',)))}, not {v!r}")
-            d[k] = v
-        elif k == "array_motion":
-            if not isinstance(v, bool):
-                raise ConfigError(f"{path}: tracker.delays.array_motion must be true or false")
-            d[k] = v
-        elif k == "range_bank":
-            if (not isinstance(v, list) or len(v) != 3
-                    or not all(isinstance(a, (int, float)) and not isinstance(a, bool)
-                               and math.isfinite(a) for a in v)
-                    or not 0 < v[0] < v[1] or not isinstance(v[2], int) or v[2] < 2):
-                raise ConfigError(f"{path}: tracker.delays.range_bank must be [r_min, r_max, n]"
-                                  " with 0 < r_min < r_max (m) and an integer n >= 2")
-            d[k] = [float(v[0]), float(v[1]), int(v[2])]
-        elif k == "source_dz_m":
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ConfigError(f"{path}: tracker.delays.source_dz_m must be a number")
-            d[k] = float(v)
-        else:
-            d[k] = _number(path, k, v, positive=k in ("range_m", "sigma_range_m",
-                                                      "sigma_bearing_deg", "sigma_speed_mps"))
-    if d["gate_prob"] >= 1:
-        raise ConfigError(f"{path}: tracker.delays.gate_prob must be < 1 (0: no gate)")
-    if d["min_corr"] > 1:
-        raise ConfigError(f"{path}: tracker.delays.min_corr must be <= 1")
+    d = DELAYS_PARAMS.check(given, path, prefix="tracker.delays.")
+    if d["range_bank"] is not None:
+        v = d["range_bank"]
+        d["range_bank"] = [float(v[0]), float(v[1]), int(v[2])]
     try:
         make_filter(filt, **params)
     except ConfigError as e:

@@ -1,4 +1,4 @@
-"""``[tracker] mode = "multi"``: every target of a products file held as a track.
+"""``[tracker] type = "multi"``: every target of a products file held as a track.
 
 Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManager` each:
 
@@ -21,7 +21,7 @@ Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManage
 
 Config (``[tracker]`` keys beside those of single mode)::
 
-    mode = "multi"
+    type = "multi"                # (older form: mode = "multi")
     measurements = "bearings"     # bearings | contacts | positions
     association = "gnn"           # gnn | jpda
     gate_prob = 0.999             # P_G

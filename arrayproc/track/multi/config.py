@@ -1,16 +1,16 @@
-"""The ``[tracker]`` keys of the multi-target tracker (``mode = "multi"``), checked on the
+"""The ``[tracker]`` keys of the multi-target tracker (``type = "multi"``), checked on the
 parsed mapping (the file is read once, by the caller): the manager's keys, the measurement
 kinds' sub-tables (declared with :class:`arrayproc.config.Param`) and, through
 :func:`arrayproc.track.single.check_single_config`, the TMA filter's keys."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-from arrayproc.config import Param, positive, read_toml
+from arrayproc.config import Param, Schema, positive, read_toml
 from arrayproc.errors import ConfigError
 from arrayproc.track.manage.initiate import MofN
+from arrayproc.track.types import legacy_table
 
 __all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_multi_config"]
 
@@ -56,16 +56,10 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
 
 
 def tracker_mode(tracker: Any) -> str:
-    """``mode`` of a parsed ``[tracker]`` table ("single" when absent)."""
-    return str(tracker.get("mode", "single")) if isinstance(tracker, dict) else "single"
-
-
-def _num(path: str, key: str, v: Any, lo: float = 0.0, strict: bool = True) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-            or v < lo or (strict and v == lo):
-        raise ConfigError(f"{path}: tracker.{key} must be a number "
-                          f"{'>' if strict else '>='} {lo}")
-    return float(v)
+    """``mode`` of a parsed ``[tracker]`` table ("single" when absent), written either way
+    (:mod:`arrayproc.track.types`)."""
+    t = legacy_table(tracker)
+    return str(t.get("mode", "single")) if isinstance(t, dict) else "single"
 
 
 
@@ -76,15 +70,50 @@ def split_config(path: str) -> tuple[dict[str, Any], dict[str, Any]]:
     return check_multi_config(doc.get("tracker"), path)
 
 
+def _int_pair(what: str) -> Any:
+    def check(v: Any) -> str | None:
+        ok = (isinstance(v, list) and len(v) == 2
+              and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
+              and 1 <= v[0] <= v[1])
+        return None if ok else f"must be {what}"
+    return check
+
+
+def _prob(strict_top: bool) -> Any:
+    def check(v: Any) -> str | None:
+        if v <= 0:
+            return "must be a number > 0"
+        if strict_top and v >= 1:
+            return "must be < 1"
+        return None if v <= 1 else "must be <= 1"
+    return check
+
+
+#: the track manager's ``[tracker]`` keys (beside the TMA filter's and the sub-tables)
+MANAGER_PARAMS = Schema({
+    "measurements": Param("str", "bearings", "what the tracks are made of",
+                          choices=("bearings", "contacts", "positions")),
+    "association": Param("str", "gnn", "global nearest neighbour or joint probabilistic data "
+                         "association", choices=("gnn", "jpda")),
+    "gate_prob": Param("float", 0.999, "P_G of the χ² gate", check=_prob(True)),
+    "confirm": Param("any", [3, 5], "[M, N]: M hits in N scans confirm a track",
+                     check=_int_pair("[M, N] integers, 1 <= M <= N")),
+    "max_misses": Param("int", 5, "consecutive missed scans before a confirmed track is "
+                        "deleted", check=lambda v: None if v >= 1 else "must be an integer >= 1"),
+    "hit_window": Param("any", None, "optional [K, W]: delete a confirmed track with fewer than "
+                        "K hits in W scans", check=_int_pair(
+                            "[K, W] integers, 1 <= K <= W (delete a confirmed track with fewer "
+                            "than K hits in W scans)")),
+    "pd": Param("float", 0.9, "JPDA detection probability", check=_prob(False)),
+    "clutter_density": Param("float", 1e-3, "JPDA false measurements per unit of measurement "
+                             "space", check=positive),
+}, "the multi-target track manager ([tracker] table, type = \"multi\")")
+
+
 def _sub_table(path: str, sub: str, given: Any) -> dict[str, Any]:
     if not isinstance(given, dict):
         raise ConfigError(f"{path}: tracker.{sub} must be a table")
-    declared = SUB_PARAMS[sub]
-    for k in given:
-        if k not in declared:
-            raise ConfigError(f"{path}: unknown key tracker.{sub}.{k}")
-    return {k: p.convert(f"{path}: tracker.{sub}.{k}", given[k]) if k in given else p.default
-            for k, p in declared.items()}
+    return Schema(SUB_PARAMS[sub]).check(given, path, prefix=f"tracker.{sub}.")
 
 
 def check_multi_config(t: Any, path: str) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -92,43 +121,14 @@ def check_multi_config(t: Any, path: str) -> tuple[dict[str, Any], dict[str, Any
     single-mode keys for the TMA filter, checked by
     :func:`arrayproc.track.single.check_single_config`)."""
     from arrayproc.track.single import check_single_config
+    t = legacy_table(t, path)
     if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
     multi = {k: t[k] for k in MULTI_KEYS if k in t}
     single = {k: v for k, v in t.items() if k not in MULTI_KEYS}
-    cfg: dict[str, Any] = {"measurements": multi.get("measurements", "bearings"),
-                           "association": multi.get("association", "gnn")}
-    if cfg["measurements"] not in ("bearings", "contacts", "positions"):
-        raise ConfigError(f"{path}: tracker.measurements must be bearings, contacts or "
-                          f"positions, not {cfg['measurements']!r}")
-    if cfg["association"] not in ("gnn", "jpda"):
-        raise ConfigError(f"{path}: tracker.association must be gnn or jpda")
-    gp = _num(path, "gate_prob", multi.get("gate_prob", 0.999))
-    if gp >= 1:
-        raise ConfigError(f"{path}: tracker.gate_prob must be < 1")
-    cfg["gate_prob"] = gp
-    conf = multi.get("confirm", [3, 5])
-    if (not isinstance(conf, list) or len(conf) != 2
-            or not all(isinstance(v, int) and not isinstance(v, bool) for v in conf)
-            or not 1 <= conf[0] <= conf[1]):
-        raise ConfigError(f"{path}: tracker.confirm must be [M, N] integers, 1 <= M <= N")
-    cfg["confirm"] = MofN(conf[0], conf[1])
-    mm = multi.get("max_misses", 5)
-    if isinstance(mm, bool) or not isinstance(mm, int) or mm < 1:
-        raise ConfigError(f"{path}: tracker.max_misses must be an integer >= 1")
-    cfg["max_misses"] = mm
-    hw = multi.get("hit_window", None)
-    if hw is not None and (not isinstance(hw, list) or len(hw) != 2
-                           or not all(isinstance(v, int) and not isinstance(v, bool)
-                                      for v in hw) or not 1 <= hw[0] <= hw[1]):
-        raise ConfigError(f"{path}: tracker.hit_window must be [K, W] integers, 1 <= K <= W "
-                          "(delete a confirmed track with fewer than K hits in W scans)")
-    cfg["hit_window"] = hw
-    pd = _num(path, "pd", multi.get("pd", 0.9))
-    if pd > 1:
-        raise ConfigError(f"{path}: tracker.pd must be <= 1")
-    cfg["pd"] = pd
-    cfg["clutter_density"] = _num(path, "clutter_density", multi.get("clutter_density", 1e-3))
+    top = {k: v for k, v in multi.items() if k not in SUB_PARAMS and k != "mode"}
+    cfg = MANAGER_PARAMS.check(top, path, prefix="tracker.")
+    cfg["confirm"] = MofN(*cfg["confirm"])
     for sub in SUB_PARAMS:
         cfg[sub] = _sub_table(path, sub, multi.get(sub, {}))
     return cfg, check_single_config(single, path)

@@ -1,4 +1,4 @@
-"""``arrayproc track`` with ``mode = "multi"``: the products' rows of one measurement kind
+"""``arrayproc track`` with ``type = "multi"``: the products' rows of one measurement kind
 tracked by its composition (:mod:`~arrayproc.track.multi.bearings`,
 :mod:`~arrayproc.track.multi.contacts`, :mod:`~arrayproc.track.multi.positions`), written as
 one ``tracks`` group."""
@@ -193,7 +193,7 @@ def _attach_rows(tracks: list[Track], scans: list[tuple[float, np.ndarray]]) -> 
 def run_multi(products_path: str, config_path: str, out_path: str,
               progress: bool = False,
               checked: tuple[dict[str, Any], dict[str, Any]] | None = None) -> None:
-    """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5`` with ``mode = "multi"``:
+    """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5`` with ``type = "multi"``:
     writes one ``tracks`` group, one row per track per scan of its life (status tentative,
     confirmed or deleted); ``checked`` the (multi, TMA) settings of
     :func:`~arrayproc.track.multi.config.check_multi_config` when the caller has read the file
