@@ -8,8 +8,8 @@ chosen one and turns what can go wrong into one line on stderr:
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
 * Python warnings (e.g. a diverging track): ``arrayproc: warning: …``;
-* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time, peak M MB`` on stdout, unless
-  ``-q`` (:mod:`arrayproc.app.progress`);
+* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time, peak M MB`` on
+  stdout, unless ``-q`` (:mod:`arrayproc.app.progress`);
 * anything else is a bug: ``arrayproc: internal error: …``, status 70, with the traceback
   only when ``ARRAYPROC_DEBUG=1``.
 
