@@ -58,9 +58,10 @@ def recording(out: Path, duration: float, reverb: dict | None) -> Path:
 
 def false_alarm_stats(res: dict) -> dict:
     """Unassociated BPSK contacts and their absolute Doppler, from the products."""
+    from arrayproc.plots._active import associate, echo_truth
+
     from arrayproc.io.products import read_products
     from arrayproc.io.recording import Recording
-    from arrayproc.plots._active import associate, echo_truth
 
     g = read_products(res["products"])["contacts"]
     with Recording(res["recording"]) as rec:
