@@ -4,8 +4,6 @@ beamwidth apart, and the lag-path kernels against plain numpy."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -215,8 +213,8 @@ def test_block_cuts_do_not_change_the_output(kind, rng):
     """The same time series cut into blocks of 8192 or of 1500 samples, and started half way
     (on the group grid): identical bytes for the groups both runs form (groups are aligned on
     the absolute snapshot grid and multiplied out whole)."""
+    from arrayproc.chain.memory import array_blocks
     from arrayproc.stages.beamform.music import MUSIC
-    from tests.stages.beamform.test_cbf import blocks_of
     pos = line_array(16, DX)
     fs = 5120.0
     x = rng.standard_normal((40000, 16)).astype(np.float32)
@@ -225,8 +223,7 @@ def test_block_cuts_do_not_change_the_output(kind, rng):
         kw = dict(nfft=512, hop=256, band=[300.0, 900.0], snapshots=16,
                   beams={"start": 60.0, "stop": 120.0, "count": 31})
         st = MVDR(**kw) if kind == "mvdr" else MUSIC(sources=2, **kw)
-        out = list(st.process(b.replace(t0=b.t0 + start / fs, meta=dataclasses.replace(
-            b.meta, sample0=b.meta.sample0 + start)) for b in blocks_of(x[start:], fs, pos, sizes)))
+        out = list(st.process(array_blocks(x[start:], fs, pos, sizes, start=start)))
         return {round(float(o.meta.times[0]), 9): o.data.tobytes() for o in out}
 
     whole = run((8192,))
