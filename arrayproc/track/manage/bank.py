@@ -193,8 +193,25 @@ class HypothesisBank:
         FilterDivergence
             Every hypothesis diverged.
         """
-        status = self.predict(dt, ctx)
-        status |= self.update(zs, ctx, measurement_model)
+        # predict and update fused per hypothesis (the same arithmetic as predict() then
+        # update(); one loop, as this is the single-target tracker's hot path)
+        meas = self.measurement_model if measurement_model is None else measurement_model
+        f = self.filter
+        status = 0
+        for h, state in enumerate(self.states):
+            if not self.alive[h]:
+                continue
+            rep = f.n_repairs
+            try:
+                upd, ll = f.update(f.predict(state, self.motion_model, dt, ctx), zs[h], meas,
+                                   ctx)
+            except FilterDivergence:
+                self._kill(h)
+                status |= 2
+                continue
+            status |= 1 if f.n_repairs > rep else 0
+            self.states[h] = upd
+            self.logw[h] += ll
         self.normalise()
         return status
 
