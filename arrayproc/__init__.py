@@ -29,6 +29,7 @@ _API = {
     # chains
     "load_chain": "arrayproc.app.api",
     "build_chain": "arrayproc.app.api",
+    "chain_from_toml": "arrayproc.app.api",
     "run_chain": "arrayproc.app.api",
     "Block": "arrayproc.chain.block",
     "Domain": "arrayproc.chain.domains",
@@ -60,6 +61,9 @@ _API = {
     "MatchedFilter": "arrayproc.stages.active.matched_filter",
     "Cfar": "arrayproc.stages.active.detect",
     "NarrowbandEKFStage": "arrayproc.stages.narrowband.nb_ekf",
+    "LRCBF": "arrayproc.stages.beamform.lr_cbf",
+    "MVDR": "arrayproc.stages.beamform.mvdr",
+    "MUSIC": "arrayproc.stages.beamform.music",
     # simulation
     "simulate_file": "arrayproc.sim.run",
     # tracking: runners, models, filters

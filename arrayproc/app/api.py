@@ -15,9 +15,9 @@ from collections.abc import Callable
 from typing import Any
 
 from arrayproc import chain as _chain
-from arrayproc.stages import build_chain, load_chain
+from arrayproc.stages import build_chain, chain_from_toml, load_chain
 
-__all__ = ["build_chain", "load_chain", "run_chain"]
+__all__ = ["build_chain", "chain_from_toml", "load_chain", "run_chain"]
 
 
 def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,

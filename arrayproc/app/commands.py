@@ -48,6 +48,7 @@ from arrayproc.io.atomic import check_output
 _LIBRARY = {
     "info": "arrayproc.app.describe",
     "process": "arrayproc.app.process",
+    "latency_line": "arrayproc.app.process",
     "import_wavs": "arrayproc.app.recordings",
     "simulate": "arrayproc.app.recordings",
     "start_time_from_names": "arrayproc.app.recordings",
@@ -86,13 +87,21 @@ def _run_info(args: argparse.Namespace) -> int:
 
 
 def _run_process(args: argparse.Namespace) -> int:
-    from arrayproc.app.process import process
+    from arrayproc.app.process import latency_line, process
     from arrayproc.app.resources import parse_bytes
+    from arrayproc.errors import ConfigError
     done = Summary.of(args)
     check_output(args.output, [args.recording, args.config, *geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    if args.idle is not None and not args.follow:
+        raise ConfigError("--idle needs --follow")
+    stats: list = []
     n = process(args.recording, args.config, args.output, positions=geometry_of(args),
-                nan=args.nan, progress=bar_wanted(args), max_memory=limit)
+                nan=args.nan, progress=bar_wanted(args) and not args.follow,
+                max_memory=limit, follow=args.follow,
+                idle_s=10.0 if args.idle is None else args.idle, stats=stats)
+    if stats and not args.quiet:
+        print(latency_line(stats[0]))
     done(args.output, f"{products_what(args.output)}, {n} block{'s' * (n != 1)}",
          audio_seconds(args.recording))
     return 0
@@ -186,6 +195,12 @@ def _add_process(sub: Any) -> None:
     add_geometry_options(s)
     s.add_argument("--nan", choices=("error", "zero"), default="error",
                    help="NaN/Inf samples: stop with an error (default) or zero them")
+    s.add_argument("--follow", action="store_true",
+                   help="the recording is still being written (HDF5 SWMR): process each "
+                        "block as it completes, write the products live, stop after --idle "
+                        "seconds without new samples or at a signal")
+    s.add_argument("--idle", type=float, default=None, metavar="S",
+                   help="with --follow: stop after S seconds without new samples (default 10)")
     s.set_defaults(func=_run_process)
 
 

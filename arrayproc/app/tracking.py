@@ -37,7 +37,7 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
         check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
     from arrayproc.track.runner import run_tracker
-    run_tracker(products, config, output, progress=progress)
+    run_tracker(products, config, output, progress=progress, cfg=cfg)
 
 
 def _products_source(products: str) -> str | None:

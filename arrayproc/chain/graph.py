@@ -12,7 +12,7 @@ from typing import Any
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
-from arrayproc.config import Param, positive, tomllib
+from arrayproc.config import Param, Schema, parse_toml, positive
 from arrayproc.errors import ConfigError
 
 
@@ -24,21 +24,23 @@ class ChainSpec:
     inputs: list[str | None]
     block: int = 8192
     text: str = ""
+    array_shape: str = "rigid"
 
     def names(self) -> list[str]:
         return [s.name for s in self.stages]
 
 
-INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive)}
+INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive,
+                             unit="samples"),
+              "array_shape": Param("str", "rigid", "element positions: the file's (rigid) or "
+                                   "threaded on the /nav track (a water-pulled towed array)",
+                                   choices=("rigid", "threaded"))}
 
 
 def parse_chain(config: Mapping[str, Any] | str, text: str = "") -> tuple[Mapping[str, Any], str]:
     """A chain given as TOML text or as a parsed mapping, as ``(mapping, text)``."""
     if isinstance(config, str):
-        try:
-            return tomllib.loads(config), config
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"chain: invalid TOML ({e})") from None
+        return parse_toml(config, "chain"), config
     return config, text
 
 
@@ -57,10 +59,8 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
     inp = config.get("input", {})
     if not isinstance(inp, Mapping):
         raise ConfigError("chain: [input] must be a table")
-    for key in inp:
-        if key not in INPUT_KEYS:
-            raise ConfigError(f"chain: [input]: unknown key {key!r}")
-    block = INPUT_KEYS["block"].convert("chain: [input]: key 'block'", inp.get("block", 8192))
+    reader = Schema(INPUT_KEYS).check(inp, "chain: [input]")
+    block, shape = reader["block"], reader["array_shape"]
     tables = config.get("stage", [])
     if not isinstance(tables, list) or not tables:
         raise ConfigError("chain: needs at least one [[stage]] table")
@@ -107,7 +107,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         stages.append(stage)
         inputs.append(src)
         names.add(name)
-    return ChainSpec(stages, inputs, block, text)
+    return ChainSpec(stages, inputs, block, text, shape)
 
 
 class _Fanout:

@@ -18,8 +18,10 @@ import numpy as np
 from arrayproc.errors import FormatError
 
 
-def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
-    """Open an HDF5 file read-only, turning every failure into one clear FormatError."""
+def open_h5(path: str | os.PathLike, what: str = "file", swmr: bool = False) -> h5py.File:
+    """Open an HDF5 file read-only, turning every failure into one clear FormatError;
+    ``swmr``: as a single-writer / multiple-reader reader of a file another process is
+    writing in SWMR mode."""
     path = Path(path)
     if not path.exists():
         raise FormatError(f"{path}: no such {what}")
@@ -34,7 +36,7 @@ def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
     try:
         if not h5py.is_hdf5(path):
             raise FormatError(f"{path}: not an HDF5 file")
-        return h5py.File(path, "r")
+        return h5py.File(path, "r", libver="latest", swmr=True) if swmr else h5py.File(path, "r")
     except FormatError:
         raise
     except PermissionError:

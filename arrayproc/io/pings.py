@@ -17,7 +17,7 @@ from arrayproc.io.h5 import attr_str
 
 @dataclass(frozen=True)
 class Replica:
-    """A transmitted waveform from ``/active/waveforms/<name>`` (DESIGN section 4).
+    """A transmitted waveform from ``/active/waveforms/<name>`` (docs/formats.md).
 
     ``samples`` float64 at ``fs`` (the recording's rate), sample 0 at the transmission start;
     ``kind`` (bpsk, hfm, cw, lfm or other), ``fc`` centre frequency (Hz), ``bandwidth`` (Hz),

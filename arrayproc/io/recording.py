@@ -1,4 +1,4 @@
-"""Recording files (DESIGN section 3): a streaming reader into blocks.
+"""Recording files (docs/formats.md): a streaming reader into blocks.
 
 The reader pulls ``/time_data`` by HDF5 hyperslabs of a fixed size (a few MB), so memory is
 bounded by the slab and block sizes, never by the file length. Files in acoular's layout (only
@@ -55,17 +55,35 @@ class Recording:
 
     Channel gains (``/array/gains``) are applied and dead channels (``/array/dead``) dropped
     in every block; ``positions``, ``n_channels`` and ``channels`` describe the active channels.
+
+    Examples
+    --------
+    Write two seconds of a four-element line array (0.75 m apart, body x forward) and read it:
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from arrayproc import Recording, RecordingWriter
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(tmp.name, "rec.h5")
+    >>> positions = np.zeros((4, 3)); positions[:, 0] = -0.75 * np.arange(4)
+    >>> with RecordingWriter(path, fs=1000.0, n_channels=4, positions=positions) as w:
+    ...     w.append(np.zeros((2000, 4), np.float32))
+    >>> with Recording(path) as rec:
+    ...     print(rec.n_channels, rec.fs, rec.duration, rec.read(0, 10).shape)
+    4 1000.0 2.0 (10, 4)
+    >>> tmp.cleanup()
     """
 
     def __init__(self, path: str | os.PathLike, positions: np.ndarray | None = None,
                  nan: str = "error", sound_speed: float | None = None,
-                 require_geometry: bool = True) -> None:
+                 require_geometry: bool = True, swmr: bool = False) -> None:
         self.path = Path(path)
         if nan not in ("error", "zero"):
             raise FormatError(f"nan policy must be 'error' or 'zero', not {nan!r}")
         self.nan_policy = nan
         self.n_nonfinite = 0
-        self._f = open_h5(self.path, "recording")
+        self.swmr = bool(swmr)
+        self._f = open_h5(self.path, "recording", swmr=self.swmr)
         try:
             self._load(positions, sound_speed, require_geometry)
         except BaseException:
@@ -220,7 +238,7 @@ class Recording:
         return walk(g, name)
 
     def active(self) -> ActivePings | None:
-        """The ``/active`` ping schedule and replicas (DESIGN section 4), or None without it
+        """The ``/active`` ping schedule and replicas (docs/formats.md), or None without it
         (:func:`arrayproc.io.pings.read_active`)."""
         return read_active(self._f, self.path, self.fs)
 
@@ -247,6 +265,34 @@ class Recording:
             self.n_nonfinite += int(bad.sum())
             x[bad] = 0.0
         return x
+
+    def refresh(self) -> int:
+        """Samples now in the file: re-reads ``/time_data``'s length, which a writer in SWMR
+        mode grows (a recording opened with ``swmr=True``; otherwise the length at open), and
+        ``/nav`` when the writer grew it too (all its datasets to one new length)."""
+        if self.swmr:
+            self._td.refresh()
+            self.n_samples = int(self._td.shape[0])
+            self._refresh_nav()
+        return self.n_samples
+
+    def _refresh_nav(self) -> None:
+        g = self._f.get("nav")
+        if not isinstance(g, h5py.Group):
+            return
+        sets = [g[k] for k in ("time", "position", "heading", "depth")
+                if isinstance(g.get(k), h5py.Dataset)]
+        for d in sets:
+            d.refresh()
+        lengths = {int(d.shape[0]) for d in sets}
+        if len(lengths) == 1 and lengths.pop() != self.nav.time.size:
+            self.nav = self._read_nav()
+            self._static_pose = None
+
+    def nav_end(self) -> float:
+        """Time of the last ``/nav`` row (s); ``inf`` for a static array (one row or none)."""
+        t = self.nav.time
+        return float(t[-1]) if t.size > 1 else float("inf")
 
     def pose(self, t: float) -> Pose:
         """The array's pose at time t (s): reference point, heading, element world positions."""

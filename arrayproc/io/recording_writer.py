@@ -24,16 +24,18 @@ class RecordingWriter(AtomicH5Writer):
 
     The file is written under a temporary name in the target directory and renamed on a
     successful close; on an exception inside a ``with`` block it is removed, so a reader never
-    sees a half-written recording.
+    sees a half-written recording. ``live=True`` (a recorder) writes the file in place in SWMR
+    mode instead: :meth:`flush` after appends, and ``arrayproc process --follow`` processes
+    it while it grows.
     """
 
     def __init__(self, path: str | os.PathLike, fs: float, n_channels: int,
                  positions: np.ndarray | None = None, sound_speed: float = DEFAULT_SOUND_SPEED,
                  start_time: str | None = None, dtype: np.dtype | type = np.float32,
                  units: str = "Pa", chunk_samples: int | None = None,
-                 attrs: dict[str, Any] | None = None) -> None:
+                 attrs: dict[str, Any] | None = None, live: bool = False) -> None:
         super().__init__(path, fs, n_channels, positions, sound_speed, start_time, dtype,
-                         units, chunk_samples, attrs)
+                         units, chunk_samples, attrs, live=live)
 
     def _start(self, fs: float, n_channels: int, positions: np.ndarray | None,
                sound_speed: float, start_time: str | None, dtype: np.dtype | type, units: str,
@@ -92,7 +94,7 @@ class RecordingWriter(AtomicH5Writer):
     def set_active(self, time: np.ndarray, waveform: np.ndarray,
                    waveforms: dict[str, tuple[np.ndarray, dict[str, Any]]],
                    projector: np.ndarray) -> None:
-        """Write ``/active`` (DESIGN section 4): ping times (s), each ping's index into the
+        """Write ``/active`` (docs/formats.md): ping times (s), each ping's index into the
         sorted waveform names, the replicas ``{name: (samples at fs, attrs)}`` with attrs
         ``kind``, ``fc``, ``bandwidth``, ``duration`` (and ``bits``), the projector (m)."""
         g = self._f.require_group("active")

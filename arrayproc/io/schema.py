@@ -109,6 +109,16 @@ _KINDS = [
         "freq_lo": _c("Hz", "lower edge of the band or line"),
         "freq_hi": _c("Hz", "upper edge of the band or line"),
         "spl_db": _c("dB re 1 µPa", "sound pressure level at the array (broadband)"),
+        "rel_bearing_deg": _c("deg", "relative bearing of the peak, port negative "
+                              "(relative-bearing beams)", False),
+        "side": _c("", "+1 starboard, −1 port: resolved by the beams; 0 ambiguous "
+                   "(relative-bearing beams)", False),
+    }),
+    Kind("doa", "root-MUSIC direction of one bin of a covariance group", {
+        "time": _c("s", "mean centre time of the group's snapshots"),
+        "freq": _c("Hz", "frequency of the bin"),
+        "cone_deg": _c("deg", "cone angle of the root (0 forward end-fire)"),
+        "radius": _c("", "modulus of the polynomial root (1 on the unit circle)"),
     }),
     Kind("ibf_removed", "plane wave removed by inverse beamforming", {
         "time": _c("s", "centre time of the snapshot"),
@@ -189,7 +199,7 @@ _KINDS = [
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
-        # multi-target mode (track/multi.py)
+        # multi-target mode (track/multi/)
         "cone_deg": _c("deg", "cone angle of a bearing track's cone filter", False),
         "sigma_cone_deg": _c("deg", "1-sigma of cone_deg", False),
         "row": _c("", "measurement row used (index in its products group; -1 coasted)",
@@ -211,6 +221,9 @@ _KINDS = [
         "speed_mps": _c("m/s", "target speed"),
         "range_sigma_m": _c("m", "range standard deviation from the CRLB (eq. 3.55)", False),
         "cost_mirror": _c("", "cost of the mirrored side hypothesis", False),
+        "preferred": _c("", "1: the solution the data prefer; 0: its mirror (sides flipped), "
+                        "written while the manoeuvre has not resolved the side", False,
+                        dtype="i1"),
     }),
 ]
 

@@ -76,7 +76,7 @@ def draw_range_doppler(g: dict, root: dict, i: int = 0, ax: Any = None, range_db
     src = src.decode() if isinstance(src, bytes) else str(src)
     if truth and src and Path(src).is_file():
         from arrayproc.io.recording import Recording
-        from arrayproc.plots._active import echo_truth
+        from arrayproc.io.truth import echo_truth
         with Recording(src) as rec:
             tr = echo_truth(rec)
         if tr is not None:

@@ -40,6 +40,9 @@ TYPES: dict[str, str] = {
     "matched_filter": "arrayproc.stages.active.matched_filter",
     "cfar": "arrayproc.stages.active.detect",
     "nb_ekf": "arrayproc.stages.narrowband.nb_ekf",
+    "lr_cbf": "arrayproc.stages.beamform.lr_cbf",
+    "mvdr": "arrayproc.stages.beamform.mvdr",
+    "music": "arrayproc.stages.beamform.music",
 }
 
 
@@ -91,10 +94,29 @@ def load_chain(path: str) -> ChainSpec:
     -------
     ChainSpec
     """
-    from arrayproc.chain import build_chain as _build
     from arrayproc.config import read_toml
-    from arrayproc.errors import ConfigError
     cfg, text = read_toml(path, "chain")
+    return chain_from_toml(cfg, text, path)
+
+
+def chain_from_toml(cfg: Mapping[str, Any], text: str, path: str) -> ChainSpec:
+    """Validate a chain file already parsed (:func:`arrayproc.config.read_toml`).
+
+    Parameters
+    ----------
+    cfg : mapping
+        The parsed TOML.
+    text : str
+        Its text (kept in the products file).
+    path : str
+        The file, for the messages.
+
+    Returns
+    -------
+    ChainSpec
+    """
+    from arrayproc.chain import build_chain as _build
+    from arrayproc.errors import ConfigError
     load_types(cfg)
     try:
         return _build(cfg, text)
@@ -114,3 +136,26 @@ def load_types(config: Any) -> None:
             load_all()
         else:
             load(types)
+
+
+def markdown_table() -> str:
+    """The stage-key table of docs/formats.md, made from the stages' declarations.
+
+    Returns
+    -------
+    str
+        A Markdown table: stage type (on its first row), key, type, default, unit and
+        description, one row per key, the package's stage types (:data:`TYPES`) in
+        alphabetical order.
+    """
+    from arrayproc.chain.stage import STAGES
+    from arrayproc.config import markdown_header
+    load_all()
+    rows = markdown_header(True, "stage")
+    for kind in sorted(TYPES):
+        cls = STAGES[kind]
+        if cls.params:
+            rows.append(cls.params.markdown(first=kind))
+        else:
+            rows.append(f"| `{kind}` | (no keys) | | | | {cls.params.summary} |")
+    return "\n".join(rows)
