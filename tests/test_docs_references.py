@@ -1,6 +1,7 @@
 """Docs that cannot go stale: every file, module and function that README.md, docs/**/*.md and
 the package's docstrings name exists, and no pointer leads to a document that is not in the
-repository (numbered work items or the old design notes).
+repository (numbered work items or the old design notes), in the docs, the package (its
+shipped TOML files included), the scripts, the tests and the build files.
 
 Checked references:
 
@@ -36,11 +37,12 @@ EXT = "py|md|toml|png|json|jsonl|csv|lock|txt|html|svg"
 
 _PATH = re.compile(rf"(?<![\w/.<>-])((?:\.\./|\./)*[A-Za-z0-9_][\w.-]*(?:/[\w.-]+)*/[\w.-]*"
                    rf"\.(?:{EXT}))\b")
+_DIR = re.compile(r"(?<![\w/.-])((?:arrayproc|scripts|tests|docs)/(?:[\w.-]+/)+)(?![\w.])")
 _DOTTED = re.compile(r"(?<![\w.\"'])(arrayproc(?:\.\w+)+)")  # not a quoted string value
 _TICKED = re.compile(r"`{1,2}~?([A-Za-z_][\w]*(?:\.[A-Za-z_]\w*)+)(?:\(\))?`{1,2}")
 _ROLE = re.compile(r":(?:func|class|meth|mod|attr|data|obj|exc):`~?([A-Za-z_][\w.]*)`")
 # "issue" followed by a number, the old design notes by name or by section
-_POINTER = re.compile(r"\bissue\s*#?\d+|\bDESIGN\s*(?:section|§)|\bDESIGN\.md", re.I)
+_POINTER = re.compile(r"\bissues?\s*#?\d+|\bDESIGN\s*(?:section|§)|\bDESIGN\.md", re.I)
 
 
 def markdown_files() -> list[Path]:
@@ -163,6 +165,7 @@ def stale_paths(text: str, base: Path) -> list[str]:
             continue
         if not any(c.exists() for c in candidates):
             out.append(p)
+    out += [d for d in _DIR.findall(text) if not (ROOT / d).is_dir()]
     return out
 
 
@@ -255,8 +258,9 @@ def test_package_names_only_what_exists():
 
 
 def test_no_pointer_to_documents_outside_the_repository():
-    files = markdown_files() + package_files() + sorted((ROOT / "scripts").rglob("*.py")) \
-        + sorted((ROOT / "tests").rglob("*.py"))
+    files = markdown_files() + [ROOT / "pyproject.toml", ROOT / "Makefile"] + [
+        f for d in ("arrayproc", "scripts", "tests") for ext in ("py", "toml")
+        for f in sorted((ROOT / d).rglob(f"*.{ext}"))]
     found = [f"{_rel(f)}: {p}" for f in files for p in pointers(f.read_text())]
     assert not found, f"{len(found)} pointers:\n" + "\n".join(found)
 
@@ -265,25 +269,27 @@ def test_no_pointer_to_documents_outside_the_repository():
 
 def test_checker_finds_planted_stale_references():
     base = ROOT / "docs" / "architecture.md"
-    text = ("See `arrayproc/workers.py`, tests/test_no_such.py, `chain/no_such.py`,\n"
+    text = ("See `arrayproc/workers.py`, tests/test_no_such.py, `chain/no_such.py`, docs/none/,\n"
             "[x](no_such.md), `arrayproc.dsp.no_such`, `arrayproc.io.recording.NoSuch`,\n"
             "`schema.no_such_function` and ``dsp.fft.NoPlan``.")
     assert sorted(stale_paths(text, base)) == ["arrayproc/workers.py", "chain/no_such.py",
-                                               "tests/test_no_such.py"]
+                                               "docs/none/", "tests/test_no_such.py"]
     assert stale_names(text) == ["arrayproc.dsp.no_such", "arrayproc.io.recording.NoSuch",
                                  "schema.no_such_function", "dsp.fft.NoPlan"]
     assert stale_roles(":func:`no_such` and :class:`Recording`", "arrayproc.io.recording") \
         == ["no_such"]
     design = "DESI" + "GN"  # spelt in two so that this file passes its own test
-    planted = f"as in iss{'ue'} 12 and {design} section 5, see {design}.md; {design} § 3"
+    planted = (f"as in iss{'ue'} 12 and {design} section 5, see {design}.md; {design} § 3; "
+               f"iss{'ues'} 12-19")
     assert pointers(planted) == [f"iss{'ue'} 12", f"{design} section", f"{design}.md",
-                                 f"{design} §"]
+                                 f"{design} §", f"iss{'ues'} 12"]
 
 
 def test_checker_accepts_what_exists():
     base = ROOT / "docs" / "architecture.md"
     text = ("`arrayproc/dsp/workers.py`, tests/test_layers.py, `chain/reader.py`, "
-            "[t](architecture/tracking.md), `arrayproc.dsp.fft.BufferedPlan`, "
+            "[t](architecture/tracking.md), arrayproc/track/models/, "
+            "`arrayproc.dsp.fft.BufferedPlan`, "
             "`arrayproc.io.recording.Recording.read`, `schema.groups_of_kind`, `np.matmul`, "
             "`out/rec.h5`, ``io.BytesIO``")
     assert stale_paths(text, base) == []
