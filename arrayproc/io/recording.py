@@ -173,6 +173,23 @@ class Recording:
 
     Channel gains (``/array/gains``) are applied and dead channels (``/array/dead``) dropped
     in every block; ``positions``, ``n_channels`` and ``channels`` describe the active channels.
+
+    Examples
+    --------
+    Write two seconds of a four-element line array (0.75 m apart, body x forward) and read it:
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from arrayproc import Recording, RecordingWriter
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(tmp.name, "rec.h5")
+    >>> positions = np.zeros((4, 3)); positions[:, 0] = -0.75 * np.arange(4)
+    >>> with RecordingWriter(path, fs=1000.0, n_channels=4, positions=positions) as w:
+    ...     w.append(np.zeros((2000, 4), np.float32))
+    >>> with Recording(path) as rec:
+    ...     print(rec.n_channels, rec.fs, rec.duration, rec.read(0, 10).shape)
+    4 1000.0 2.0 (10, 4)
+    >>> tmp.cleanup()
     """
 
     def __init__(self, path: str | os.PathLike, positions: np.ndarray | None = None,

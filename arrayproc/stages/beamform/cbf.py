@@ -119,7 +119,40 @@ def symmetric_pairs(rel: np.ndarray, weights: np.ndarray,
 
 @register
 class CBF(Stage):
-    """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
+    """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc.
+
+    Examples
+    --------
+    Outside a chain: the keys are checked when the stage is made, and ``process`` turns time
+    blocks into beams. A 250 Hz plane wave reaching eight elements (0.75 m apart) at the same
+    time comes from broadside:
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from arrayproc import CBF, Recording, RecordingWriter
+    >>> from arrayproc.chain.reader import read_blocks
+    >>> cbf = CBF(nfft=256, beams={"start": 0.0, "stop": 180.0, "count": 19}, threads=1)
+    >>> cbf.hop  # 0 means nfft / 2
+    128
+    >>> CBF(nfft=256, beam=3)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    arrayproc.errors.ConfigError: stage 'cbf': unknown key 'beam' for type 'cbf' (known: ...)
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(tmp.name, "rec.h5")
+    >>> positions = np.zeros((8, 3)); positions[:, 0] = -0.75 * np.arange(8)
+    >>> wave = np.sin(2 * np.pi * 250.0 * np.arange(4096) / 1000.0)
+    >>> with RecordingWriter(path, 1000.0, 8, positions=positions) as w:
+    ...     w.append(np.repeat(wave[:, None], 8, axis=1).astype(np.float32))
+    >>> with Recording(path) as rec:
+    ...     block = next(cbf.process(read_blocks(rec, 1024, 1024)))
+    >>> block.data.shape  # (snapshots, bins, beams)
+    (31, 129, 19)
+    >>> power = (np.abs(block.data) ** 2).sum(axis=(0, 1))
+    >>> float(block.beams[np.argmax(power)])  # cone angle, deg
+    90.0
+    >>> tmp.cleanup()
+    """
 
     kind = "cbf"
     accepts = frozenset({Domain.TIME})
