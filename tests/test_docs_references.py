@@ -6,7 +6,8 @@ shipped TOML files included), the scripts, the tests and the build files.
 Checked references:
 
 - file paths (``arrayproc/...``, ``scripts/...``, ``tests/...``, ``docs/...``, a path inside the
-  package such as ``chain/reader.py``, and relative links between the Markdown files);
+  package such as ``chain/reader.py`` or under ``tests/``, relative links between the Markdown
+  files) and test names (``tests/x/test_y.py::test_z``);
 - dotted names ``arrayproc.x.y`` and ``arrayproc.x.y.name`` (attributes of classes included);
 - ``module.name`` forms whose first part is a module of the package that only one module
   path ends with (``schema.groups_of_kind``, ``dsp.framing.FrameBuffer``);
@@ -38,6 +39,7 @@ EXT = "py|md|toml|png|json|jsonl|csv|lock|txt|html|svg"
 _PATH = re.compile(rf"(?<![\w/.<>-])((?:\.\./|\./)*[A-Za-z0-9_][\w.-]*(?:/[\w.-]+)*/[\w.-]*"
                    rf"\.(?:{EXT}))\b")
 _DIR = re.compile(r"(?<![\w/.-])((?:arrayproc|scripts|tests|docs)/(?:[\w.-]+/)+)(?![\w.])")
+_TEST_NAME = re.compile(r"([\w./-]+\.py)::(\w+)")
 _DOTTED = re.compile(r"(?<![\w.\"'])(arrayproc(?:\.\w+)+)")  # not a quoted string value
 _TICKED = re.compile(r"`{1,2}~?([A-Za-z_][\w]*(?:\.[A-Za-z_]\w*)+)(?:\(\))?`{1,2}")
 _ROLE = re.compile(r":(?:func|class|meth|mod|attr|data|obj|exc):`~?([A-Za-z_][\w.]*)`")
@@ -166,6 +168,12 @@ def stale_paths(text: str, base: Path) -> list[str]:
         if not any(c.exists() for c in candidates):
             out.append(p)
     out += [d for d in _DIR.findall(text) if not (ROOT / d).is_dir()]
+    for path, name in _TEST_NAME.findall(text):  # ``tests/x/test_y.py::test_z``
+        files = [ROOT / path, ROOT / "tests" / path, base.parent / path]
+        f = next((f for f in files if f.is_file()), None)
+        if f is not None and not re.search(rf"^\s*(?:async\s+)?(?:def|class)\s+{name}\b",
+                                           f.read_text(), re.M):
+            out.append(f"{path}::{name}")
     return out
 
 
@@ -270,10 +278,12 @@ def test_no_pointer_to_documents_outside_the_repository():
 def test_checker_finds_planted_stale_references():
     base = ROOT / "docs" / "architecture.md"
     text = ("See `arrayproc/workers.py`, tests/test_no_such.py, `chain/no_such.py`, docs/none/,\n"
-            "[x](no_such.md), `arrayproc.dsp.no_such`, `arrayproc.io.recording.NoSuch`,\n"
+            "[x](no_such.md), `tests/test_layers.py::test_no_such`, `arrayproc.dsp.no_such`,\n"
+            "`arrayproc.io.recording.NoSuch`,\n"
             "`schema.no_such_function` and ``dsp.fft.NoPlan``.")
     assert sorted(stale_paths(text, base)) == ["arrayproc/workers.py", "chain/no_such.py",
-                                               "docs/none/", "tests/test_no_such.py"]
+                                               "docs/none/", "tests/test_layers.py::test_no_such",
+                                               "tests/test_no_such.py"]
     assert stale_names(text) == ["arrayproc.dsp.no_such", "arrayproc.io.recording.NoSuch",
                                  "schema.no_such_function", "dsp.fft.NoPlan"]
     assert stale_roles(":func:`no_such` and :class:`Recording`", "arrayproc.io.recording") \
@@ -288,6 +298,7 @@ def test_checker_finds_planted_stale_references():
 def test_checker_accepts_what_exists():
     base = ROOT / "docs" / "architecture.md"
     text = ("`arrayproc/dsp/workers.py`, tests/test_layers.py, `chain/reader.py`, "
+            "`test_docs_references.py::test_checker_accepts_what_exists`, "
             "[t](architecture/tracking.md), arrayproc/track/models/, "
             "`arrayproc.dsp.fft.BufferedPlan`, "
             "`arrayproc.io.recording.Recording.read`, `schema.groups_of_kind`, `np.matmul`, "
