@@ -265,6 +265,18 @@ def test_package_names_only_what_exists():
     assert not stale, "stale references in the package:\n" + "\n".join(sorted(set(stale)))
 
 
+def test_scripts_and_tests_name_only_what_exists():
+    stale = []
+    for d in ("scripts", "tests"):
+        for path in sorted((ROOT / d).rglob("*.py")):
+            if path == Path(__file__).resolve():
+                continue  # the planted references below
+            stale += [f"{_rel(path)}: {p}" for p in stale_paths(path.read_text(), path)]
+            stale += [f"{_rel(path)} ({where}): {n}"
+                      for where, doc in docstrings(path) for n in stale_names(doc)]
+    assert not stale, "stale references:\n" + "\n".join(sorted(set(stale)))
+
+
 def test_no_pointer_to_documents_outside_the_repository():
     files = markdown_files() + [ROOT / "pyproject.toml", ROOT / "Makefile"] + [
         f for d in ("arrayproc", "scripts", "tests") for ext in ("py", "toml")
