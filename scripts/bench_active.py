@@ -13,7 +13,10 @@ baseband series with each time-reversed conjugate baseband replica (mode "valid"
 |.|^2; the ratio is reference time / our time for the same cells.
 
     .venv/bin/python scripts/bench_active.py [--beams 360] [--step 0.5] [--threads 2]
-        [--ref-beams 4] [--json OUT]
+        [--ref-beams 4] [--steps] [--json OUT]
+
+``--step 0`` is the shipped chain's range-rate grid (the 3 dB Doppler resolution: 271
+channels); ``--steps`` prints each step's share of the ping's CPU time.
 """
 
 from __future__ import annotations
@@ -65,6 +68,46 @@ class MemRecording:
         return [self._pose] * len(t)
 
 
+def instrument() -> dict:
+    """Wrap the steps of a ping with timers (thread CPU time and wall time, summed over the
+    threads that run them); returns the dict they fill: name -> [cpu s, wall s, calls]."""
+    import threading
+
+    from arrayproc.dsp import fft as F
+    from arrayproc.stages.active import _kernels as AK
+    from arrayproc.stages.active import bank as bk
+    from arrayproc.stages.active import detect as dt
+    from arrayproc.stages.active import matched_filter as mfm
+    from arrayproc.stages.active import ping_beams as pb
+    acc: dict = {}
+    lock = threading.Lock()
+
+    def wrap(obj, name: str, label: str) -> None:
+        f = getattr(obj, name)
+
+        def timed(*a, **k):
+            t, w = time.thread_time(), time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                with lock:
+                    v = acc.setdefault(label, [0.0, 0.0, 0])
+                    v[0] += time.thread_time() - t
+                    v[1] += time.perf_counter() - w
+                    v[2] += 1
+        setattr(obj, name, timed)
+    wrap(pb, "beam_series", "beams (active_beams)")
+    wrap(mfm, "replica_spectra", "replica spectra (once)")
+    wrap(mfm.sfft, "fft", "beam FFTs")
+    wrap(AK, "mul_rows", "correlator: multiply")
+    wrap(F.BufferedPlan, "__call__", "correlator: inverse FFT")
+    wrap(AK, "power_rows", "correlator: square law")
+    wrap(bk.Correlator, "__call__", "correlator (all three)")
+    wrap(dt, "detect", "CFAR detection")
+    wrap(dt, "cluster", "CFAR clustering")
+    return acc
+
+
 def make_ping(n_el: int, fs: float, seed: int):
     from arrayproc.acoustics import waveforms as wfm
     c = 1500.0
@@ -97,6 +140,8 @@ def main() -> None:
     ap.add_argument("--ref-beams", type=int, default=4)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--steps", action="store_true",
+                    help="time each step (thread CPU summed over threads) and print its share")
     args = ap.parse_args()
     os.environ.setdefault("NUMBA_NUM_THREADS", str(args.threads))
     from arrayproc.chain import RunContext
@@ -127,6 +172,7 @@ def main() -> None:
         s.bind(wctx)
     list(ws[2](ws[1](ws[0](read_blocks(small, 8192)))))
 
+    steps = instrument() if args.steps else None
     rss0 = rss_mb()
     cpu0, t0 = time.process_time(), time.perf_counter()
     out = list(cfar(mf(beams(read_blocks(rec, 8192)))))
@@ -153,6 +199,12 @@ def main() -> None:
           f"{cells / 1e6:.0f}e6 cells: {wall:.1f} s wall, {cpu:.1f} s CPU "
           f"(ping interval 30 s); peak RSS {rss1:.0f} MB (cube alone {cube_gb:.2f} GB float32)")
     print(f"contacts {res['contacts']}; strongest {res.get('strongest')}")
+    if steps is not None:
+        res["steps"] = {k: {"cpu_s": v[0], "wall_sum_s": v[1], "calls": v[2],
+                            "share": v[0] / cpu} for k, v in steps.items()}
+        for k, v in steps.items():
+            print(f"  {k:34s} {v[0]:7.2f} s CPU ({100 * v[0] / cpu:4.1f} % of the ping), "
+                  f"{v[2]} calls")
 
     # matched filter alone vs plain fftconvolve, same beams and replicas
     from scipy.signal import fftconvolve

@@ -6,6 +6,9 @@ Prints the real-time factor (simulated seconds per wall-clock second) of the ful
 each part, and the throughput of the numba propagation kernel against a plain-numpy
 implementation of the same computation in this process.
 
+Then the demo scenario (arrayproc/data/scenarios/towed_passive.toml) free field and with
+first-order image-source multipath (surface + bottom, 3 paths per source), same process.
+
     .venv/bin/python scripts/bench_sim.py [--duration 60] [--threads 2] [--json OUT]
 """
 
@@ -44,6 +47,37 @@ def bench_scenario(duration: float) -> dict:
         ],
         "noise": {"level_db": 60.0},
     }
+
+
+#: first-order image sources added to the demo scenario (make demo): pressure-release
+#: surface and a 200 m flat bottom with 6 dB loss per bounce (3 paths per source)
+DEMO_MULTIPATH = {"surface": True, "bottom_depth": 200.0, "bottom_loss_db": 6.0, "order": 1}
+
+
+def demo_realtime(duration: float) -> dict:
+    """Render speed (x real time, wall and CPU) of the demo scenario, free field and with
+    first-order multipath, measured one after the other in this process."""
+    from arrayproc.config import read_toml
+    from arrayproc.sim.run import Simulator
+    from arrayproc.sim.scenario import parse_scenario
+
+    path = Path(__file__).resolve().parents[1] / "arrayproc/data/scenarios/towed_passive.toml"
+    rows = {}
+    for label, mp in (("free_field", None), ("multipath_order1", DEMO_MULTIPATH)):
+        data, _ = read_toml(path, "scenario")
+        data["recording"]["duration"] = duration
+        if mp is not None:
+            data["propagation"]["multipath"] = dict(mp)
+        sim = Simulator(parse_scenario(data, str(path), base_dir=path.parent))
+        sim.render(0, 2048)  # compile / warm caches
+        n, chunk = sim.n_samples, sim.s.chunk
+        t0, c0 = time.perf_counter(), time.process_time()
+        for k in range(0, n, chunk):
+            sim.render(k, min(n, k + chunk))
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        rows[label] = {"paths_per_source": len(sim.images), "wall_s": wall, "cpu_s": cpu,
+                       "realtime_wall": duration / wall, "realtime_cpu": duration / cpu}
+    return rows
 
 
 def numpy_propagation(sim, k0: int, k1: int) -> np.ndarray:
@@ -152,6 +186,13 @@ def main() -> None:
     print(f"{'propagation 1 s, plain numpy':<44}{t_numpy:>10.3f}{1 / t_numpy:>14.1f}")
     print(f"numba / numpy speed-up {t_numpy / t_numba:.1f}x; max relative difference "
           f"{agree:.1e}")
+    demo = demo_realtime(args.duration)
+    rows["demo"] = demo
+    print(f"demo scenario (towed_passive.toml: 32 ch, 2048 Hz, 2 sources + tow ship), "
+          f"{args.duration:g} s:")
+    for label, r in demo.items():
+        print(f"  {label:<20} {r['paths_per_source']} path(s)/source: {r['wall_s']:.2f} s wall, "
+              f"{r['realtime_wall']:.1f}x real time (CPU {r['realtime_cpu']:.1f}x)")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=2))
 

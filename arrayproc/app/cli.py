@@ -144,9 +144,14 @@ def ensure_numba_cache(warn_fn=warn, environ: dict | None = None) -> str | None:
 
 # -- signals and warnings -----------------------------------------------------------------------
 def _on_signal(signum: int, frame: object) -> None:
-    from arrayproc.io.atomic import request_stop, stop_requested
+    from arrayproc.io.atomic import graceful, request_stop, set_graceful, stop_requested
     first = stop_requested() is None
     request_stop(signum)
+    if graceful():  # process --follow: the first signal ends the stream, a second stops now
+        if first:
+            return
+        set_graceful(False)
+        raise Interrupted(signum)
     if first:  # later signals do not interrupt the clean-up of the first
         raise Interrupted(signum)
 

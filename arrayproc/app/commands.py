@@ -15,6 +15,7 @@ and ``info`` start quickly.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from collections.abc import Callable, Sequence
@@ -102,7 +103,8 @@ def info(path: str, positions: Any = None, echo: Echo = print) -> None:
 # -- process ----------------------------------------------------------------------------------
 def process(recording: str, chain: str, output: str, positions: Any = None,
             nan: str = "error", progress: bool = False, max_memory: float | None = None,
-            warn: Echo = _stderr) -> int:
+            warn: Echo = _stderr, follow: bool = False, idle_s: float = 10.0,
+            stats: list | None = None) -> int:
     """Run a processing chain over a recording into a products file.
 
     Parameters
@@ -124,6 +126,15 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
         the machine's RAM).
     warn : callable
         Where warnings go.
+    follow : bool
+        The recording is still being written (HDF5 SWMR): process each block as soon as it
+        is complete, write the products live (SWMR, readable while they grow) and stop after
+        ``idle_s`` seconds without new samples or at a signal, leaving a complete file
+        (:mod:`arrayproc.chain.follow`).
+    idle_s : float
+        See ``follow``.
+    stats : list, optional
+        Receives the :class:`arrayproc.chain.follow.FollowStats` of a followed run.
 
     Returns
     -------
@@ -131,6 +142,8 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
         Number of time blocks processed.
     """
     check_output(output, [recording, chain])
+    if follow and not (math.isfinite(idle_s) and idle_s > 0):
+        raise ConfigError(f"--idle must be a number of seconds > 0, got {idle_s}")
     from arrayproc.app.resources import check_chain_memory
     from arrayproc.config import tomllib
     from arrayproc.io.recording import Recording
@@ -139,18 +152,51 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
             raw = tomllib.loads(fh.read().decode())
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         raw = None  # load_chain below names the problem
-    with Recording(recording, positions=positions, nan=nan) as r:
+    with Recording(recording, positions=positions, nan=nan, swmr=follow) as r:
         if raw is not None:  # before any stage is built: parameters can ask for terabytes
             check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
         from arrayproc.app.api import load_chain, run_chain
         from arrayproc.io.products import ProductsWriter
         spec = load_chain(chain)  # validated before any data is read
-        with ProductsWriter(output, source=str(Path(recording).resolve()),
-                            chain=spec.text) as out:
-            n = run_chain(r, spec, out, progress=progress, log=warn)
+        if follow:
+            n = _follow(r, spec, recording, output, idle_s, warn, stats)
+        else:
+            with ProductsWriter(output, source=str(Path(recording).resolve()),
+                                chain=spec.text) as out:
+                n = run_chain(r, spec, out, progress=progress, log=warn)
         if r.n_nonfinite:
             warn(f"{recording}: {r.n_nonfinite} NaN/Inf samples replaced by zeros")
     return n
+
+
+def _follow(r: Any, spec: Any, recording: str, output: str, idle_s: float, warn: Echo,
+            stats: list | None) -> int:
+    """``process --follow``: the live products file, stop requests ending the stream."""
+    from arrayproc.chain.follow import follow_chain
+    from arrayproc.io.atomic import set_graceful
+    from arrayproc.io.products import ProductsWriter
+    set_graceful(True)
+    try:
+        with ProductsWriter(output, source=str(Path(recording).resolve()), chain=spec.text,
+                            live=True) as out:
+            st = follow_chain(r, spec, out, idle_s=idle_s, log=warn)
+    finally:
+        set_graceful(False)
+    if stats is not None:
+        stats.append(st)
+    return len(st.done)
+
+
+def latency_line(st: Any) -> str:
+    """One line: why a followed run ended and its block latencies (median, 95 %, max)."""
+    import numpy as np
+    lat = st.latencies()
+    if lat.size == 0:
+        return f"followed until {st.reason}; no block"
+    q = np.percentile(lat, [50, 95])
+    return (f"followed until {st.reason}; latency from a block's last sample to its products "
+            f"on disk: median {q[0]:.3f} s, 95 % {q[1]:.3f} s, max {lat.max():.3f} s "
+            f"({lat.size} blocks)")
 
 
 # -- import -----------------------------------------------------------------------------------
@@ -543,8 +589,12 @@ def _run_process(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    stats: list = []
     n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
-                nan=args.nan, progress=bar_wanted(args), max_memory=limit)
+                nan=args.nan, progress=bar_wanted(args) and not args.follow,
+                max_memory=limit, follow=args.follow, idle_s=args.idle, stats=stats)
+    if stats and not args.quiet:
+        print(latency_line(stats[0]))
     done(args.output, f"{products_what(args.output)}, {n} block{'s' * (n != 1)}",
          audio_seconds(args.recording))
     return 0
@@ -646,6 +696,12 @@ def add_parser(sub: Any) -> None:
     add_geometry_options(s)
     s.add_argument("--nan", choices=("error", "zero"), default="error",
                    help="NaN/Inf samples: stop with an error (default) or zero them")
+    s.add_argument("--follow", action="store_true",
+                   help="the recording is still being written (HDF5 SWMR): process each "
+                        "block as it completes, write the products live, stop after --idle "
+                        "seconds without new samples or at a signal")
+    s.add_argument("--idle", type=float, default=10.0, metavar="S",
+                   help="with --follow: stop after S seconds without new samples (default 10)")
     s.set_defaults(func=_run_process)
 
     s = sub.add_parser("import", help="turn WAV field recordings into a recording file")

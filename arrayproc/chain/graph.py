@@ -24,12 +24,16 @@ class ChainSpec:
     inputs: list[str | None]
     block: int = 8192
     text: str = ""
+    array_shape: str = "rigid"
 
     def names(self) -> list[str]:
         return [s.name for s in self.stages]
 
 
-INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive)}
+INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive),
+              "array_shape": Param("str", "rigid", "element positions: the file's (rigid) or "
+                                   "threaded on the /nav track (a water-pulled towed array)",
+                                   choices=("rigid", "threaded"))}
 
 
 def parse_chain(config: Mapping[str, Any] | str, text: str = "") -> tuple[Mapping[str, Any], str]:
@@ -61,6 +65,8 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         if key not in INPUT_KEYS:
             raise ConfigError(f"chain: [input]: unknown key {key!r}")
     block = INPUT_KEYS["block"].convert("chain: [input]: key 'block'", inp.get("block", 8192))
+    shape = INPUT_KEYS["array_shape"].convert("chain: [input]: key 'array_shape'",
+                                              inp.get("array_shape", "rigid"))
     tables = config.get("stage", [])
     if not isinstance(tables, list) or not tables:
         raise ConfigError("chain: needs at least one [[stage]] table")
@@ -107,7 +113,7 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
         stages.append(stage)
         inputs.append(src)
         names.add(name)
-    return ChainSpec(stages, inputs, block, text)
+    return ChainSpec(stages, inputs, block, text, shape)
 
 
 def load_chain(path: str) -> ChainSpec:

@@ -1,9 +1,11 @@
 """The chain's source: a recording's samples as time blocks (domain ``TIME``), each with the
-array's pose at its centre time."""
+array's pose at its centre time (and, for ``[input] array_shape = "threaded"``, the element
+positions threaded on the navigation track)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -11,6 +13,7 @@ import numpy as np
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import FormatError
+from arrayproc.geo.threading import threaded_positions
 
 #: Bytes of samples read from the file at once (a slab holds many blocks).
 SLAB_BYTES = 8 << 20
@@ -42,7 +45,7 @@ def count_blocks(recording: Any, nfft: int, hop: int, start: int = 0,
 
 def read_blocks(recording: Any, nfft: int, hop: int | None = None, start: int = 0,
                 stop: int | None = None, dtype: np.dtype | type = np.float32,
-                first_index: int = 0) -> Iterator[Block]:
+                first_index: int = 0, array_shape: str = "rigid") -> Iterator[Block]:
     """Time-domain blocks of ``nfft`` samples every ``hop`` samples over [start, stop).
 
     Block k covers samples [start + k·hop, start + k·hop + nfft). The last block is the first
@@ -65,6 +68,10 @@ def read_blocks(recording: Any, nfft: int, hop: int | None = None, start: int = 
         Sample type of the blocks.
     first_index : int
         ``index`` of the first block.
+    array_shape : str
+        ``"rigid"``: the file's element positions; ``"threaded"``: each block's positions
+        (body frame of its pose) and pose elements threaded on the ``/nav`` track
+        (:func:`arrayproc.geo.threading.threaded_positions`).
 
     Yields
     ------
@@ -86,7 +93,13 @@ def read_blocks(recording: Any, nfft: int, hop: int | None = None, start: int = 
         a = start + k * hop
         b = min(stop, start + (kk - 1) * hop + nfft)
         slab = recording.read(a, b, dtype)
-        poses = recording.poses((start + np.arange(k, kk) * hop + 0.5 * nfft) / fs)
+        tc = (start + np.arange(k, kk) * hop + 0.5 * nfft) / fs
+        poses = recording.poses(tc)
+        positions = [recording.positions] * len(poses)
+        if array_shape == "threaded":
+            bt, world = threaded_positions(recording.nav, recording.positions, tc)
+            positions = list(bt)
+            poses = [replace(p, elements=w) for p, w in zip(poses, world)]
         for j in range(k, kk):
             s = start + j * hop
             seg = slab[s - a: s - a + nfft]
@@ -94,6 +107,6 @@ def read_blocks(recording: Any, nfft: int, hop: int | None = None, start: int = 
             if n_valid < nfft:
                 seg = np.concatenate(
                     [seg, np.zeros((nfft - n_valid, recording.n_channels), dtype=dtype)])
-            yield Block(seg, Domain.TIME, s / fs, nfft / fs, fs, recording.positions,
+            yield Block(seg, Domain.TIME, s / fs, nfft / fs, fs, positions[j - k],
                         poses[j - k], index=first_index + j, meta=TimeMeta(s, n_valid))
         k = kk

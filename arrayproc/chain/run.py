@@ -41,7 +41,8 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     stop = recording.n_samples if t_stop is None else min(recording.n_samples,
                                                           int(round((t_stop + margin) * fs)))
     n = count_blocks(recording, spec.block, spec.block, start, stop)
-    source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop)
+    source: Iterable[Block] = read_blocks(recording, spec.block, spec.block, start, stop,
+                                          array_shape=spec.array_shape)
     if progress:
         source = _counted(source, progress, spec.block, stop - start, fs)
     leaves, queues = compose(spec, source)

@@ -27,6 +27,7 @@ from arrayproc.errors import FormatError, Interrupted
 _LIVE: set[Path] = set()
 _LOCK = threading.Lock()
 _STOP: list[int] = []  # signal numbers requested, first one wins
+_GRACEFUL: list[bool] = [False]  # a live run ends its stream on a stop request
 
 
 # -- stop requests ----------------------------------------------------------------------------
@@ -47,9 +48,21 @@ def clear_stop() -> None:
 
 
 def check_stop() -> None:
-    """Raise :class:`Interrupted` when a stop was requested."""
-    if _STOP:
+    """Raise :class:`Interrupted` when a stop was requested (not during a graceful run)."""
+    if _STOP and not _GRACEFUL[0]:
         raise Interrupted(_STOP[0])
+
+
+def set_graceful(on: bool) -> None:
+    """A run that follows live input ends on the first stop request instead of raising:
+    the signal handler only records it, :func:`check_stop` lets the writers finish and the
+    run's source ends its stream (``process --follow``)."""
+    _GRACEFUL[0] = bool(on)
+
+
+def graceful() -> bool:
+    """Whether stop requests end the stream instead of raising (:func:`set_graceful`)."""
+    return _GRACEFUL[0]
 
 
 # -- output paths -----------------------------------------------------------------------------
@@ -176,23 +189,40 @@ class AtomicH5Writer:
 
     Subclasses do their set-up in :meth:`_start`; when it fails, the temporary file is removed
     before the error propagates (a constructor never leaks a ``.part`` file).
+
+    ``live=True`` writes ``path`` itself, readable while it grows: HDF5 single-writer /
+    multiple-reader (SWMR) mode from the end of :meth:`_start` on, :meth:`flush` after each
+    batch of rows; a reader opens it with ``h5py.File(path, "r", swmr=True)`` and
+    ``refresh()``-es the datasets. The file is still removed on an error; a subclass marks it
+    complete in :meth:`_finish`.
     """
 
-    def __init__(self, path: str | os.PathLike, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, path: str | os.PathLike, *args: Any, live: bool = False,
+                 **kwargs: Any) -> None:
         import h5py
         self.path = Path(path)
+        self.live = bool(live)
         check_stop()
-        self._tmp = temporary_sibling(self.path)
+        self._tmp = self.path if self.live else temporary_sibling(self.path)
+        if self.live:
+            register(self._tmp)
         try:
-            self._f = h5py.File(self._tmp, "w")
+            self._f = h5py.File(self._tmp, "w", libver="latest") if self.live else \
+                h5py.File(self._tmp, "w")
         except BaseException:
             discard(self._tmp)
             raise
         try:
             self._start(*args, **kwargs)
+            if self.live:
+                self._f.swmr_mode = True
         except BaseException:
             self.abort()
             raise
+
+    def flush(self) -> None:
+        """Write what was appended so far to disk (readers in SWMR mode then see it)."""
+        self._f.flush()
 
     def _start(self) -> None:
         """Set-up of a subclass after the file is created."""
@@ -206,7 +236,11 @@ class AtomicH5Writer:
             check_stop()
             self._finish()
             self._f.close()
-            commit(self._tmp, self.path)
+            if self.live:
+                with _LOCK:
+                    _LIVE.discard(self._tmp)
+            else:
+                commit(self._tmp, self.path)
         except BaseException:
             self.abort()
             raise

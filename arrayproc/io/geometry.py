@@ -28,6 +28,40 @@ def line_array(n: int, spacing: float) -> np.ndarray:
     return pos
 
 
+def twin_line_array(n: int, spacing: float, separation: float) -> np.ndarray:
+    """Positions (2n, 3) of a twin line array: two uniform lines of ``n`` stations along body x,
+    ``separation`` m apart across (y = ∓separation/2, port then starboard at each station;
+    channels station by station from the forward end). The cross-axis offset is what resolves
+    port from starboard (thesis 2.2.4.1)."""
+    if not separation > 0:
+        raise FormatError(f"twin line array needs separation > 0 (got {separation})")
+    line = line_array(n, spacing)
+    pos = np.repeat(line, 2, axis=0)
+    pos[0::2, 1] = -separation / 2.0
+    pos[1::2, 1] = separation / 2.0
+    return pos
+
+
+#: Angles of a triplet's hydrophones around the array axis, deg from starboard (+y) towards
+#: down (+z): one on top, two below on either side (an equilateral triangle).
+TRIPLET_ANGLES_DEG = (-90.0, 30.0, 150.0)
+
+
+def triplet_array(n: int, spacing: float, radius: float) -> np.ndarray:
+    """Positions (3n, 3) of a triplet array (Groen et al. 2005): ``n`` stations along body x,
+    each with three hydrophones on a circle of ``radius`` m around the axis at
+    :data:`TRIPLET_ANGLES_DEG`; channels station by station from the forward end. The
+    cross-axis aperture (y extent) is √3·radius."""
+    if not radius > 0:
+        raise FormatError(f"triplet array needs radius > 0 (got {radius})")
+    line = line_array(n, spacing)
+    pos = np.repeat(line, 3, axis=0)
+    ang = np.deg2rad(np.tile(TRIPLET_ANGLES_DEG, n))
+    pos[:, 1] = radius * np.cos(ang)
+    pos[:, 2] = radius * np.sin(ang)
+    return pos
+
+
 def read_geometry_csv(path: str | Path) -> np.ndarray:
     """Element positions (n, 3) in m from a CSV with a header holding columns ``x, y, z``.
 

@@ -3,7 +3,9 @@
 Each group is named after the producing stage and carries attrs ``kind`` and ``stage``. Column
 datasets are resizable along their first axis, chunked and compressed; static datasets (axes
 such as ``cone_deg`` or ``freq``) are written once. The file is built under a temporary name and
-renamed only when the run finished, with root attr ``complete = True``.
+renamed only when the run finished, with root attr ``complete = True``; a live run
+(``process --follow``) writes the file in place in SWMR mode, readable while it grows, and sets
+``complete`` at its end.
 """
 
 from __future__ import annotations
@@ -118,8 +120,8 @@ class ProductsWriter(AtomicH5Writer):
 
     def __init__(self, path: str | os.PathLike, source: str = "", chain: str = "",
                  time_window: tuple[float, float] | None = None,
-                 attrs: dict[str, Any] | None = None) -> None:
-        super().__init__(path, source, chain, time_window, attrs)
+                 attrs: dict[str, Any] | None = None, live: bool = False) -> None:
+        super().__init__(path, source, chain, time_window, attrs, live=live)
 
     def _start(self, source: str, chain: str, time_window: tuple[float, float] | None,
                attrs: dict[str, Any] | None) -> None:

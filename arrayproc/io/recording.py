@@ -27,8 +27,10 @@ FORMAT_VERSION = 1
 DEFAULT_SOUND_SPEED = 1500.0
 
 
-def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
-    """Open an HDF5 file read-only, turning every failure into one clear FormatError."""
+def open_h5(path: str | os.PathLike, what: str = "file", swmr: bool = False) -> h5py.File:
+    """Open an HDF5 file read-only, turning every failure into one clear FormatError;
+    ``swmr``: as a single-writer / multiple-reader reader of a file another process is
+    writing in SWMR mode."""
     path = Path(path)
     if not path.exists():
         raise FormatError(f"{path}: no such {what}")
@@ -43,7 +45,7 @@ def open_h5(path: str | os.PathLike, what: str = "file") -> h5py.File:
     try:
         if not h5py.is_hdf5(path):
             raise FormatError(f"{path}: not an HDF5 file")
-        return h5py.File(path, "r")
+        return h5py.File(path, "r", libver="latest", swmr=True) if swmr else h5py.File(path, "r")
     except FormatError:
         raise
     except PermissionError:
@@ -194,13 +196,14 @@ class Recording:
 
     def __init__(self, path: str | os.PathLike, positions: np.ndarray | None = None,
                  nan: str = "error", sound_speed: float | None = None,
-                 require_geometry: bool = True) -> None:
+                 require_geometry: bool = True, swmr: bool = False) -> None:
         self.path = Path(path)
         if nan not in ("error", "zero"):
             raise FormatError(f"nan policy must be 'error' or 'zero', not {nan!r}")
         self.nan_policy = nan
         self.n_nonfinite = 0
-        self._f = open_h5(self.path, "recording")
+        self.swmr = bool(swmr)
+        self._f = open_h5(self.path, "recording", swmr=self.swmr)
         try:
             self._load(positions, sound_speed, require_geometry)
         except BaseException:
@@ -421,6 +424,14 @@ class Recording:
             x[bad] = 0.0
         return x
 
+    def refresh(self) -> int:
+        """Samples now in the file: re-reads ``/time_data``'s length, which a writer in SWMR
+        mode grows (a recording opened with ``swmr=True``; otherwise the length at open)."""
+        if self.swmr:
+            self._td.refresh()
+            self.n_samples = int(self._td.shape[0])
+        return self.n_samples
+
     def pose(self, t: float) -> Pose:
         """The array's pose at time t (s): reference point, heading, element world positions."""
         return self.poses(np.array([t]))[0]
@@ -454,16 +465,18 @@ class RecordingWriter(AtomicH5Writer):
 
     The file is written under a temporary name in the target directory and renamed on a
     successful close; on an exception inside a ``with`` block it is removed, so a reader never
-    sees a half-written recording.
+    sees a half-written recording. ``live=True`` (a recorder) writes the file in place in SWMR
+    mode instead: :meth:`flush` after appends, and ``arrayproc process --follow`` processes
+    it while it grows.
     """
 
     def __init__(self, path: str | os.PathLike, fs: float, n_channels: int,
                  positions: np.ndarray | None = None, sound_speed: float = DEFAULT_SOUND_SPEED,
                  start_time: str | None = None, dtype: np.dtype | type = np.float32,
                  units: str = "Pa", chunk_samples: int | None = None,
-                 attrs: dict[str, Any] | None = None) -> None:
+                 attrs: dict[str, Any] | None = None, live: bool = False) -> None:
         super().__init__(path, fs, n_channels, positions, sound_speed, start_time, dtype,
-                         units, chunk_samples, attrs)
+                         units, chunk_samples, attrs, live=live)
 
     def _start(self, fs: float, n_channels: int, positions: np.ndarray | None,
                sound_speed: float, start_time: str | None, dtype: np.dtype | type, units: str,

@@ -101,6 +101,16 @@ _KINDS = [
         "freq_lo": _c("Hz", "lower edge of the band or line"),
         "freq_hi": _c("Hz", "upper edge of the band or line"),
         "spl_db": _c("dB re 1 µPa", "sound pressure level at the array (broadband)"),
+        "rel_bearing_deg": _c("deg", "relative bearing of the peak, port negative "
+                              "(relative-bearing beams)", False),
+        "side": _c("", "+1 starboard, −1 port: resolved by the beams; 0 ambiguous "
+                   "(relative-bearing beams)", False),
+    }),
+    Kind("doa", "root-MUSIC direction of one bin of a covariance group", {
+        "time": _c("s", "mean centre time of the group's snapshots"),
+        "freq": _c("Hz", "frequency of the bin"),
+        "cone_deg": _c("deg", "cone angle of the root (0 forward end-fire)"),
+        "radius": _c("", "modulus of the polynomial root (1 on the unit circle)"),
     }),
     Kind("ibf_removed", "plane wave removed by inverse beamforming", {
         "time": _c("s", "centre time of the snapshot"),

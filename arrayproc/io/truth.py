@@ -66,7 +66,8 @@ def cone_angles(rec, t: np.ndarray) -> dict[str, np.ndarray]:
 
 def tonal_frequencies(rec, t: np.ndarray, dt: float = 0.5) -> dict[str, np.ndarray]:
     """Received (Doppler-shifted) frequency of each source's tonals at times t: (n_t, n_tonals)
-    Hz, ``f (1 − dτ/dt)`` with τ the emission-time propagation delay."""
+    Hz, ``f(t − τ)·(1 − dτ/dt)`` with τ the emission-time propagation delay and f(t) = f +
+    drift·t for a drifting tonal."""
     t = np.asarray(t, float)
     out = {}
     for name, s in sources(rec).items():
@@ -76,5 +77,8 @@ def tonal_frequencies(rec, t: np.ndarray, dt: float = 0.5) -> dict[str, np.ndarr
         tp, _ = _geometry(rec, s, t + dt)
         tm, _ = _geometry(rec, s, t - dt)
         rate = (tp - tm) / (2 * dt)
-        out[name] = f0[None, :] * (1.0 - rate)[:, None]
+        drift = np.asarray(s.get("attrs", {}).get("tonal_drift_hz_per_s", np.zeros(f0.size)),
+                           float).reshape(-1)
+        t_emit = t - 0.5 * (tp + tm)  # a drifting tonal's frequency at emission
+        out[name] = (f0[None, :] + drift[None, :] * t_emit[:, None]) * (1.0 - rate)[:, None]
     return out

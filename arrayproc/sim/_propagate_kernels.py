@@ -25,6 +25,10 @@ its t_e). For a static monostatic sonar and a target at constant range rate ṙ 
 exact time scaling d = (c − ṙ)/(c + ṙ) of thesis eq. (4.8). An optional time distortion
 t ↦ t + α sin(2πt/T)(1 − cos 2πt/T) of the pulse (thesis eq. (4.6)) adds Doppler spread.
 
+Image sources (``arrayproc.sim.multipath``): the caller passes an image's states (depth
+mirrored) and its reflection coefficient as ``scale``; the kernels add the rough surface's
+per-element coherent factor.
+
 Loss laws (``amp_mode``): 0 spherical 1/r; 1 cylindrical beyond a transition range r_t
 (1/r up to r_t, then 1/√(r_t·r)); 2 tabulated amplitude gain on a uniform range grid, read
 linearly.
@@ -61,6 +65,13 @@ def _gain(r: float, amp_mode: int, r_t: float, gtab: np.ndarray, g_r0: float,
         return gtab[gtab.shape[0] - 1]
     f = x - i
     return gtab[i] + f * (gtab[i + 1] - gtab[i])
+
+
+@njit(cache=True, inline="always")
+def _rough(rough: float, dz: float, dist: float) -> float:
+    """exp(−rough·sin²θ), sin θ = |dz|/dist: the coherent reflection of a rough surface."""
+    s = dz / max(dist, 1e-6)
+    return math.exp(-rough * s * s)
 
 
 @njit(cache=True, inline="always", fastmath=True)
@@ -109,8 +120,9 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
                       lateral: np.ndarray, body: np.ndarray, c: float, sig: np.ndarray,
                       sig_t0: float, fs_src: float, table: np.ndarray, amp_mode: int,
                       r_t: float, gtab: np.ndarray, g_r0: float, g_dr: float,
-                      scale: float) -> None:
-    """Add one source's field to ``out`` (n, ch) float32.
+                      scale: float, wamp: np.ndarray, epos: np.ndarray,
+                      rough: float) -> None:
+    """Add one source's (or one image path's) field to ``out`` (n, ch) float32.
 
     Per sample k: ``t[k]`` reception time (s); ``rpos[k]`` array reference point (x, y) and
     ``rdepth[k]`` its depth (m); ``sin_h``/``cos_h`` of the heading; ``lateral[k]`` lateral
@@ -118,9 +130,13 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
     frame. ``ref_tau[k]`` a travel time close to the reference point's (the expansion point)
     and ``spos/svel/sacc`` (n, 3) the source's exact state at ``t[k] − ref_tau[k]``. ``sig``
     is the source signal at rate ``fs_src`` whose sample 0 is at emission time ``sig_t0``;
-    ``scale`` multiplies the result. Parallel over blocks of samples; the result of a sample
-    does not depend on the blocking.
+    ``scale`` multiplies the result and ``wamp[k]`` the sample's (a path's reflection factor).
+    ``epos`` (n, ch, 3): element world positions per sample (a bending array); with zero rows
+    the rigid pose above is used. ``rough`` = n_surface·2(kσ)²: the rough surface's coherent
+    factor exp(−rough·sin²θ), θ the grazing angle of the path to each element (0: smooth).
+    Parallel over blocks of samples; the result of a sample does not depend on the blocking.
     """
+    bent = epos.shape[0] > 0
     n = out.shape[0]
     nch = out.shape[1]
     half = table.shape[1] // 2
@@ -128,6 +144,7 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
     nblk = (n + BLOCK - 1) // BLOCK
     for b in prange(nblk):
         tau = np.empty(nch)
+        zel = np.empty(nch)
         for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             sh = sin_h[k]
             chd = cos_h[k]
@@ -137,18 +154,27 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
             lat = lateral[k]
             t0 = ref_tau[k]
             for ch in range(nch):
-                by = body[ch, 1] + lat
-                ex = rx + body[ch, 0] * sh + by * chd
-                ey = ry + body[ch, 0] * chd - by * sh
-                ez = rz + body[ch, 2]
+                if bent:
+                    ex = epos[k, ch, 0]
+                    ey = epos[k, ch, 1]
+                    ez = epos[k, ch, 2]
+                else:
+                    by = body[ch, 1] + lat
+                    ex = rx + body[ch, 0] * sh + by * chd
+                    ey = ry + body[ch, 0] * chd - by * sh
+                    ez = rz + body[ch, 2]
                 tau[ch] = _solve(ex, ey, ez, t0, spos, svel, sacc, k, c)
+                zel[ch] = ez
             tk = t[k]
+            sk = scale * wamp[k]
             for ch in range(nch):
                 u = (tk - tau[ch] - sig_t0) * fs_src
                 if u < half - 1 or u >= ns - half - 1:
                     continue
                 g = _gain(c * tau[ch], amp_mode, r_t, gtab, g_r0, g_dr)
-                out[k, ch] += scale * g * interp_one(sig, u, table)
+                if rough != 0.0:
+                    g *= _rough(rough, spos[k, 2] - zel[ch], c * tau[ch])
+                out[k, ch] += sk * g * interp_one(sig, u, table)
 
 
 @njit(cache=True, parallel=True, fastmath=True)
@@ -159,15 +185,23 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
                     lateral: np.ndarray, body: np.ndarray, c: float, sig: np.ndarray,
                     t_ping: float, sig_t0: float, fs_src: float, table: np.ndarray,
                     amp_mode: int, r_t: float, gtab: np.ndarray, g_r0: float, g_dr: float,
-                    scale: float, alpha: float, pulse_len: float) -> None:
+                    scale: float, alpha: float, pulse_len: float, wamp: np.ndarray,
+                    epos: np.ndarray, za: float, zs: float, rough_r: float,
+                    rough_t: float) -> None:
     """Add one echo (one ping, one scatterer) to ``out[k0 : k0 + len(t)]`` (float32).
 
     Arrays indexed by k are over the echo window's samples ``t[k]``. ``ts_ref/te_ref`` are the
     reference point's exact scattering and emission times, with the target's and the
     projector's exact states at them (n, 3). ``sig`` is the pulse sampled at ``fs_src``, its
     sample 0 at pulse time ``sig_t0`` (s after the ping's start ``t_ping``); ``alpha`` (s) is
-    the eq. (4.6) distortion amplitude over the pulse length ``pulse_len`` (s).
+    the eq. (4.6) distortion amplitude over the pulse length ``pulse_len`` (s). ``wamp[k]``
+    multiplies sample k and ``epos`` (n or 0, ch, 3) are bent-array element positions, as in
+    :func:`oneway_accumulate`. Image paths: the target states are those of the receive leg's
+    image (depth z' = a + s·z) and ``za + zs·z'`` maps the image depth back to the target's
+    (identity: 0, 1); the projector states are the transmit leg's image. ``rough_r`` and
+    ``rough_t``: each leg's rough-surface exponent, as ``rough`` of :func:`oneway_accumulate`.
     """
+    bent = epos.shape[0] > 0
     n = t.shape[0]
     nch = out.shape[1]
     half = table.shape[1] // 2
@@ -182,10 +216,15 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
             tk = t[k]
             tau0 = tk - ts_ref[k]
             for ch in range(nch):
-                by = body[ch, 1] + lat
-                ex = rpos[k, 0] + body[ch, 0] * sh + by * chd
-                ey = rpos[k, 1] + body[ch, 0] * chd - by * sh
-                ez = rdepth[k] + body[ch, 2]
+                if bent:
+                    ex = epos[k, ch, 0]
+                    ey = epos[k, ch, 1]
+                    ez = epos[k, ch, 2]
+                else:
+                    by = body[ch, 1] + lat
+                    ex = rpos[k, 0] + body[ch, 0] * sh + by * chd
+                    ey = rpos[k, 1] + body[ch, 0] * chd - by * sh
+                    ez = rdepth[k] + body[ch, 2]
                 # receive leg: c·τ2 = |e − x_T(t − τ2)|, t_s = t − τ2
                 tau2 = _solve(ex, ey, ez, tau0, tpos, tvel, tacc, k, c)
                 ts = tk - tau2
@@ -193,7 +232,7 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
                 hd = 0.5 * d2 * d2
                 tx = tpos[k, 0] + tvel[k, 0] * d2 + tacc[k, 0] * hd
                 ty = tpos[k, 1] + tvel[k, 1] * d2 + tacc[k, 1] * hd
-                tz = tpos[k, 2] + tvel[k, 2] * d2 + tacc[k, 2] * hd
+                tz = za + zs * (tpos[k, 2] + tvel[k, 2] * d2 + tacc[k, 2] * hd)
                 # transmit leg: c·τ1 = |x_T(t_s) − x_P(t_s − τ1)|, t_e = t_s − τ1
                 tau1 = _solve(tx, ty, tz, ts - te_ref[k], ppos, pvel, pacc, k, c)
                 tp = ts - tau1 - t_ping  # pulse time of the emission
@@ -205,4 +244,78 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
                     continue
                 g = (_gain(c * tau2, amp_mode, r_t, gtab, g_r0, g_dr)
                      * _gain(c * tau1, amp_mode, r_t, gtab, g_r0, g_dr))
-                out[k0 + k, ch] += scale * g * interp_one(sig, u, table)
+                if rough_r != 0.0:
+                    g *= _rough(rough_r, tpos[k, 2] - ez, c * tau2)
+                if rough_t != 0.0:
+                    g *= _rough(rough_t, ppos[k, 2] - tz, c * tau1)
+                out[k0 + k, ch] += scale * wamp[k] * g * interp_one(sig, u, table)
+
+
+#: The same echo kernel compiled serially: for short windows (reverberation scatterers, a few
+#: hundred samples on few channels) the parallel launch costs more than the work.
+echo_accumulate_serial = njit(cache=True, fastmath=True)(echo_accumulate.py_func)
+
+
+@njit(cache=True, inline="always")
+def _tab_lin(tab: np.ndarray, col: int, x: float) -> float:
+    if x <= 0.0:
+        return tab[0, col]
+    i = int(x)
+    if i >= tab.shape[0] - 1:
+        return tab[tab.shape[0] - 1, col]
+    f = x - i
+    return tab[i, col] + f * (tab[i + 1, col] - tab[i, col])
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def table_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray, svel: np.ndarray,
+                     sacc: np.ndarray, t: np.ndarray, rpos: np.ndarray, rdepth: np.ndarray,
+                     sin_h: np.ndarray, cos_h: np.ndarray, lateral: np.ndarray,
+                     body: np.ndarray, epos: np.ndarray, sig: np.ndarray, sigq: np.ndarray,
+                     sig_t0: float, fs_src: float, table: np.ndarray, tab: np.ndarray,
+                     r0: float, dr: float, scale: float) -> None:
+    """Add one tabulated ray family (BELLHOP arrivals) of one source to ``out`` (n, ch).
+
+    ``tab`` (n_r, 3): the family's delay τ(r) (s) and complex amplitude A(r)·e^{iφ(r)} (real,
+    imaginary) on horizontal ranges r0 + i·dr. Per sample and element the travel time solves
+    τ = τ_fam(r_h(t − τ)), r_h the horizontal distance from the element to the source at
+    emission (Taylor-expanded about t − ref_tau as in :func:`oneway_accumulate`), by three
+    fixed-point steps (contraction |v_S|/c); the pressure is
+    Re A·s(t − τ) − Im A·ŝ(t − τ), ŝ = ``sigq`` the source signal's Hilbert transform: a tonal
+    cos ωt arrives as |A| cos(ω(t − τ) + φ), whose phasor Σ A e^{i(φ − ωτ)} is BELLHOP's
+    coherent pressure. Other arguments as in :func:`oneway_accumulate`.
+    """
+    n = out.shape[0]
+    nch = out.shape[1]
+    half = table.shape[1] // 2
+    ns = sig.shape[0]
+    bent = epos.shape[0] > 0
+    nblk = (n + BLOCK - 1) // BLOCK
+    for b in prange(nblk):
+        for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            t0 = ref_tau[k]
+            for ch in range(nch):
+                if bent:
+                    ex = epos[k, ch, 0]
+                    ey = epos[k, ch, 1]
+                else:
+                    by = body[ch, 1] + lateral[k]
+                    ex = rpos[k, 0] + body[ch, 0] * sin_h[k] + by * cos_h[k]
+                    ey = rpos[k, 1] + body[ch, 0] * cos_h[k] - by * sin_h[k]
+                tau = t0
+                x = 0.0
+                for _ in range(3):
+                    d = tau - t0
+                    hd = 0.5 * d * d
+                    sx = spos[k, 0] - svel[k, 0] * d + sacc[k, 0] * hd
+                    sy = spos[k, 1] - svel[k, 1] * d + sacc[k, 1] * hd
+                    rh = math.sqrt((ex - sx) ** 2 + (ey - sy) ** 2)
+                    x = (rh - r0) / dr
+                    tau = _tab_lin(tab, 0, x)
+                u = (t[k] - tau - sig_t0) * fs_src
+                if u < half - 1 or u >= ns - half - 1:
+                    continue
+                are = _tab_lin(tab, 1, x)
+                aim = _tab_lin(tab, 2, x)
+                out[k, ch] += scale * (are * interp_one(sig, u, table)
+                                       - aim * interp_one(sigq, u, table))

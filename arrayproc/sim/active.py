@@ -18,23 +18,57 @@ from dataclasses import dataclass
 import numpy as np
 
 from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
-from arrayproc.sim._propagate_kernels import echo_accumulate
+from arrayproc.sim._propagate_kernels import echo_accumulate, echo_accumulate_serial
 from arrayproc.sim.motion import BodyOffsetMover, FixedMover, TrackMover
+from arrayproc.sim.multipath import ImageMover, images, rough_exponent
 from arrayproc.sim.propagation import LossLaw, PoseTrack, forward_time, grid_nodes, retarded_time
-from arrayproc.sim.scenario import ActiveSpec
+from arrayproc.sim.scenario import ActiveSpec, MultipathSpec, ReverbSpec
 from arrayproc.sim.sources import tonal_amplitude
 
 KEY_CLUTTER = 31
+KEY_REVERB = 32
+SERIAL_BELOW = 16384  # element-samples of an echo window below which the kernel runs serially
 
 
 @dataclass
 class Scatterer:
     name: str
-    kind: str  # "target" | "clutter"
+    kind: str  # "target" | "highlight" | "clutter" | "feature" | "reverb"
     mover: object
     depth: float
-    ts_db: float
+    ts_db: float  # for "reverb": 10 log10(μ·A), A the area each scatterer stands for
     alpha: float = 0.0
+    lambert: bool = False  # scattering ∝ sin θi · sin θs (Lambert's law), per ping geometry
+
+
+class RowsMover:
+    """Fixed points, one per row of the times asked for (a batch of static scatterers)."""
+
+    is_static = True
+
+    def __init__(self, positions: np.ndarray) -> None:
+        self.positions = np.asarray(positions, float)
+
+    def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n = np.atleast_1d(np.asarray(t)).size
+        if n != self.positions.shape[0]:
+            raise ValueError(f"RowsMover holds {self.positions.shape[0]} rows, asked {n}")
+        z = np.zeros_like(self.positions)
+        return self.positions, z, z
+
+
+def reverb_scatterers(rv: ReverbSpec, seed: int, index: int) -> list[Scatterer]:
+    """Boundary reverberation as random point scatterers, uniform over the area at the given
+    density n (m⁻²), each standing for A = 1/n of boundary: σ_i = μ·A·sin θi·sin θs (Lambert's
+    law), so the mean reverberant intensity is the sonar equation's
+    SL − 2 TL + 10 log10(μ sin θi sin θs) + 10 log10(ensonified area)."""
+    a = rv.area
+    n = int(round(rv.density * (a[1] - a[0]) * (a[3] - a[2])))
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(KEY_REVERB, index)))
+    xy = np.column_stack([rng.uniform(a[0], a[1], n), rng.uniform(a[2], a[3], n)])
+    ts = rv.strength_db - 10 * np.log10(rv.density)
+    return [Scatterer(f"reverb{index}.{i}", "reverb", FixedMover([x, y, rv.depth]), rv.depth,
+                      float(ts), lambert=True) for i, (x, y) in enumerate(xy)]
 
 
 class PingTrain:
@@ -66,8 +100,13 @@ class ActiveSim:
 
     def __init__(self, spec: ActiveSpec, own: TrackMover, loss: LossLaw, c: float, fs: float,
                  fs_src: float, duration: float, seed: int, array_extent: float,
-                 source_movers: dict[str, TrackMover]) -> None:
+                 source_movers: dict[str, TrackMover],
+                 multipath: MultipathSpec | None = None) -> None:
         self.spec = spec
+        self.multipath = multipath
+        imgs = images(multipath)
+        #: (receive-leg image, transmit-leg image) of every echo path, the direct one first
+        self.path_pairs = [(ir, it) for ir in imgs for it in imgs]
         self.own = own
         self.loss = loss
         self.c = float(c)
@@ -88,8 +127,16 @@ class ActiveSim:
             mover = (source_movers[tg.source] if tg.source is not None
                      and tg.depth == source_movers[tg.source].depth
                      else TrackMover(tg.traj, tg.depth))
-            self.scatterers.append(Scatterer(tg.name, "target", mover, tg.depth, tg.ts_db,
-                                             tg.distortion))
+            if tg.length <= 0 or tg.highlights == 1:
+                self.scatterers.append(Scatterer(tg.name, "target", mover, tg.depth, tg.ts_db,
+                                                 tg.distortion))
+                continue
+            ts_h = tg.ts_db - 10 * np.log10(tg.highlights)  # total TS kept (incoherent sum)
+            for k, x in enumerate(np.linspace(0.5 * tg.length, -0.5 * tg.length,
+                                              tg.highlights)):
+                self.scatterers.append(Scatterer(
+                    f"{tg.name}.h{k}", "highlight", BodyOffsetMover(mover, [x, 0.0, 0.0]),
+                    tg.depth, float(ts_h), tg.distortion))
         if spec.clutter is not None and spec.clutter.count > 0:
             cl = spec.clutter
             rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(KEY_CLUTTER,)))
@@ -100,6 +147,13 @@ class ActiveSim:
                 self.scatterers.append(Scatterer(
                     f"clutter{i}", "clutter", FixedMover([xy[i, 0], xy[i, 1], cl.depth]),
                     cl.depth, float(ts[i])))
+        for ft in spec.features:
+            for k, (x, y) in enumerate(ft.points):
+                self.scatterers.append(Scatterer(f"{ft.name}.{k}", "feature",
+                                                 FixedMover([x, y, ft.depth]), ft.depth,
+                                                 ft.ts_db))
+        for j, rv in enumerate(spec.reverberation):
+            self.scatterers += reverb_scatterers(rv, seed, j)
         # pulse buffers with K+2 zero samples of margin each side, one per waveform
         pad = HALF_WIDTH + 2
         self.sig_t0 = -pad / self.fs_src
@@ -121,40 +175,77 @@ class ActiveSim:
             self.windows = {k: np.zeros(0) for k in rows}
             return
         pad = extent / c + (HALF_WIDTH + 3) / self.fs_src + 2.0 / self.fs
+        sl = np.array([self.spec.levels[n] for n in self.ping_names])
+        static: dict[float, list[int]] = {}  # fixed scatterers by depth: one batch each
         for j, sc in enumerate(self.scatterers):
-            arr = []
-            for te in (tp, tp + T):
-                xp = self.projector.state3(te)[0]
-                ts = forward_time(xp, te, sc.mover, c)
-                xt = sc.mover.state3(ts)[0]
-                tr = forward_time(xt, ts, self.own, c)
-                arr.append((ts, tr))
-            (ts, tr), (_, tr_end) = arr
-            pp, pv, _ = self.projector.state3(tp)
-            tp3, tv, _ = sc.mover.state3(ts)
-            rp, rv, _ = self.own.state3(tr)
-            r1v, r2v = tp3 - pp, tp3 - rp
-            r1 = np.linalg.norm(r1v, axis=1)
-            r2 = np.linalg.norm(r2v, axis=1)
-            rr = 0.5 * (np.sum(r1v / r1[:, None] * (tv - pv), axis=1)
-                        + np.sum(r2v / r2[:, None] * (tv - rv), axis=1))
-            depth_r = float(self.own.depth)
-            sl = np.array([self.spec.levels[n] for n in self.ping_names])
-            level = (sl + sc.ts_db
-                     - self.loss.tl_db(r1, sc.depth, depth_r) - self.loss.tl_db(r2, sc.depth,
-                                                                                depth_r))
-            rows["ping"].append(np.arange(tp.size))
-            rows["target"].append(np.full(tp.size, j))
-            rows["time"].append(tr)
-            rows["delay_s"].append(tr - tp)
-            rows["range_rate_mps"].append(rr)
-            rows["level_db"].append(level)
-            rows["range_m"].append(0.5 * (r1 + r2))
-            rows["t_start"].append(tr - pad - sc.alpha)
-            rows["t_end"].append(tr_end + pad + sc.alpha)
+            if isinstance(sc.mover, FixedMover) and sc.alpha == 0.0:
+                static.setdefault(sc.depth, []).append(j)
+                continue
+            self._echo_rows(rows, sc.mover, np.full(tp.size, j), np.arange(tp.size), tp, T,
+                            sl + sc.ts_db, sc.depth, sc.alpha, pad)
+        for depth, idx in static.items():
+            idx = np.asarray(idx)
+            pos = np.array([self.scatterers[j].mover.position for j in idx])
+            ts_db = np.array([self.scatterers[j].ts_db for j in idx])
+            n = tp.size
+            self._echo_rows(rows, RowsMover(np.repeat(pos, n, axis=0)), np.repeat(idx, n),
+                            np.tile(np.arange(n), idx.size), np.tile(tp, idx.size),
+                            np.tile(T, idx.size), np.tile(sl, idx.size) + np.repeat(ts_db, n),
+                            depth, 0.0, pad)
         self.windows = {k: np.concatenate(v) for k, v in rows.items()}
         order = np.lexsort((self.windows["target"], self.windows["ping"]))
         self.windows = {k: v[order] for k, v in self.windows.items()}
+
+    def _echo_rows(self, rows: dict, mover: object, target: np.ndarray, ping: np.ndarray,
+                   tp: np.ndarray, T: np.ndarray, level0: np.ndarray, depth: float,
+                   alpha: float, pad: float) -> None:
+        """Append the truth and window rows of echoes from ``mover`` (one row per emission
+        time ``tp``; ``level0`` = SL + TS of each)."""
+        c = self.c
+        arr = []
+        for te in (tp, tp + T):
+            xp = self.projector.state3(te)[0]
+            ts = forward_time(xp, te, mover, c)
+            xt = mover.state3(ts)[0]
+            tr = forward_time(xt, ts, self.own, c)
+            arr.append((ts, tr))
+        (ts, tr), (_, tr_end) = arr
+        tr_first, tr_last = self._path_span(mover, tp, T, tr, tr_end)
+        pp, pv, _ = self.projector.state3(tp)
+        tp3, tv, _ = mover.state3(ts)
+        rp, rv, _ = self.own.state3(tr)
+        r1v, r2v = tp3 - pp, tp3 - rp
+        r1 = np.linalg.norm(r1v, axis=1)
+        r2 = np.linalg.norm(r2v, axis=1)
+        rr = 0.5 * (np.sum(r1v / r1[:, None] * (tv - pv), axis=1)
+                    + np.sum(r2v / r2[:, None] * (tv - rv), axis=1))
+        depth_r = float(self.own.depth)
+        level = level0 - self.loss.tl_db(r1, depth, depth_r) - self.loss.tl_db(r2, depth,
+                                                                                depth_r)
+        rows["ping"].append(ping)
+        rows["target"].append(target)
+        rows["time"].append(tr)
+        rows["delay_s"].append(tr - tp)
+        rows["range_rate_mps"].append(rr)
+        rows["level_db"].append(level)
+        rows["range_m"].append(0.5 * (r1 + r2))
+        rows["t_start"].append(tr_first - pad - alpha)
+        rows["t_end"].append(tr_last + pad + alpha)
+
+    def _path_span(self, mover: object, tp: np.ndarray, T: np.ndarray, tr: np.ndarray,
+                   tr_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First and last arrival times at the array over every echo path of each ping."""
+        first, last = tr.copy(), tr_end.copy()
+        c = self.c
+        for ir, it in self.path_pairs[1:]:
+            proj = ImageMover(self.projector, it)
+            for te, is_end in ((tp, False), (tp + T, True)):
+                ts = forward_time(proj.state3(te)[0], te, mover, c)
+                xt = ImageMover(mover, ir).state3(ts)[0]
+                ta = forward_time(xt, ts, self.own, c)
+                first = np.minimum(first, ta) if not is_end else first
+                last = np.maximum(last, ta) if is_end else last
+        return first, last
 
     def truth(self) -> dict:
         """``/truth/pings`` (time, waveform name, source level) and ``/truth/echoes`` (DESIGN
@@ -162,15 +253,20 @@ class ActiveSim:
         only one's in the single-waveform form), the schedule and the projector offset."""
         w = self.windows
         wf = self.spec.waveform
+        reverb = np.array([sc.kind == "reverb" for sc in self.scatterers] + [False])
+        keep = ~reverb[w["target"].astype(np.int64)] if w["target"].size else np.zeros(0, bool)
         return {
             "pings": {"time": self.ping_times.astype(float),
                       "waveform": np.array(self.ping_names, dtype="S"),
                       "level_db": np.array([self.spec.levels[n] for n in self.ping_names],
                                            float)},
-            "echoes": {"ping": w["ping"].astype(np.int64), "target": w["target"].astype(np.int64),
-                       "time": w["time"], "delay_s": w["delay_s"],
-                       "range_rate_mps": w["range_rate_mps"], "level_db": w["level_db"],
-                       "range_m": w["range_m"]},
+            # every echo but the reverberation scatterers' (those are in /truth/scatterers)
+            "echoes": {k: (w[src][keep].astype(np.int64) if k in ("ping", "target")
+                           else w[src][keep])
+                       for k, src in (("ping", "ping"), ("target", "target"), ("time", "time"),
+                                      ("delay_s", "delay_s"),
+                                      ("range_rate_mps", "range_rate_mps"),
+                                      ("level_db", "level_db"), ("range_m", "range_m"))},
             "scatterers": {"name": np.array([s.name for s in self.scatterers], dtype="S"),
                            "kind": np.array([s.kind for s in self.scatterers], dtype="S"),
                            "ts_db": np.array([s.ts_db for s in self.scatterers]),
@@ -224,19 +320,46 @@ class ActiveSim:
             k = int(w["ping"][i])
             tp = float(self.ping_times[k])
             name = self.ping_names[k]
-            tw = t[i0:i1]
-            # expansion points on the absolute grid (exact there), interpolated
-            tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
-            ts_g = tg - retarded_time(self.own.state3(tg)[0], tg, sc.mover, self.c)
-            te_g = ts_g - retarded_time(sc.mover.state3(ts_g)[0], ts_g, self.projector, self.c)
-            ts = np.interp(tw, tg, ts_g)
-            te = np.interp(tw, tg, te_g)
-            tpos, tvel, tacc = sc.mover.state3(ts)
-            ppos, pvel, pacc = self.projector.state3(te)
-            mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
-            echo_accumulate(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw,
-                            pose.rpos[i0:i1], pose.rdepth[i0:i1], pose.sin_h[i0:i1],
-                            pose.cos_h[i0:i1], pose.lateral[i0:i1], body, self.c,
-                            self.sigs[name], tp, self.sig_t0, self.fs_src, self.table, mode,
-                            r_t, gtab, g0, gdr, self.amps[name] * 10 ** (sc.ts_db / 20.0),
-                            sc.alpha, self.spec.waveforms[name].duration)
+            pw = pose.window(i0, i1)
+            geo = self._lambert(sc, tp, float(w["time"][i])) if sc.lambert else 1.0
+            for ir, it in self.path_pairs:
+                self._render_path(out, k0, i0, i1, t[i0:i1], pw, body, sc, tp, name, ir, it,
+                                  geo)
+
+    def _lambert(self, sc: Scatterer, tp: float, ta: float) -> float:
+        """√(sin θi · sin θs): Lambert's law amplitude factor of a boundary scatterer, from the
+        projector at the ping time and the array reference point at the echo's arrival."""
+        xs = sc.mover.state3(np.zeros(1))[0][0]
+        xp = self.projector.state3(np.array([tp]))[0][0]
+        xr = self.own.state3(np.array([ta]))[0][0]
+        si = abs(xs[2] - xp[2]) / max(np.linalg.norm(xs - xp), 1e-9)
+        ss = abs(xs[2] - xr[2]) / max(np.linalg.norm(xs - xr), 1e-9)
+        return float(np.sqrt(si * ss))
+
+    def _render_path(self, out: np.ndarray, k0: int, i0: int, i1: int, tw: np.ndarray,
+                     pw: PoseTrack, body: np.ndarray, sc: Scatterer, tp: float, name: str,
+                     ir: object, it: object, geo: float = 1.0) -> None:
+        """One echo path: transmit leg by image ``it`` of the projector, receive leg by image
+        ``ir`` of the scatterer (samples i0 … i1 of the chunk starting at k0)."""
+        tgt = ImageMover(sc.mover, ir)
+        proj = ImageMover(self.projector, it)
+        # expansion points on the absolute grid (exact there), interpolated
+        tg = grid_nodes(k0 + i0, k0 + i1, self.fs)
+        ts_g = tg - retarded_time(self.own.state3(tg)[0], tg, tgt, self.c)
+        te_g = ts_g - retarded_time(sc.mover.state3(ts_g)[0], ts_g, proj, self.c)
+        ts = np.interp(tw, tg, ts_g)
+        te = np.interp(tw, tg, te_g)
+        tpos, tvel, tacc = tgt.state3(ts)
+        ppos, pvel, pacc = proj.state3(te)
+        w = np.ones(tw.size)
+        mode, r_t, gtab, g0, gdr = self.loss.kernel_args(sc.depth, float(self.own.depth))
+        kernel = echo_accumulate if tw.size * body.shape[0] > SERIAL_BELOW else \
+            echo_accumulate_serial
+        kernel(out, i0, ts, tpos, tvel, tacc, te, ppos, pvel, pacc, tw, pw.rpos,
+                        pw.rdepth, pw.sin_h, pw.cos_h, pw.lateral, body, self.c,
+                        self.sigs[name], tp, self.sig_t0, self.fs_src, self.table, mode,
+                        r_t, gtab, g0, gdr,
+                        geo * ir.coef * it.coef * self.amps[name] * 10 ** (sc.ts_db / 20.0),
+                        sc.alpha, self.spec.waveforms[name].duration, w, pw.epos,
+                        -ir.s * ir.a, ir.s, rough_exponent(self.multipath, ir, self.c),
+                        rough_exponent(self.multipath, it, self.c))

@@ -51,8 +51,51 @@ class TrackMover:
         acc[:, :2] = a2
         return pos, vel, acc, crs, rate
 
+    @property
+    def is_static(self) -> bool:
+        """Whether the point never moves or turns (speed and turn rate 0 throughout)."""
+        return bool(np.all(self._tab[3] == 0.0) and np.all(self._tab[4] == 0.0))
+
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.evaluate(t)[:3]
+
+    def arc_length(self, t: np.ndarray) -> np.ndarray:
+        """Distance travelled along the track since its start time (m; negative before it:
+        the first leg extended backwards). Speeds are constant within segments, so this is
+        piecewise linear in t."""
+        tb, _, _, v, _ = self._tab
+        sb = np.concatenate([[0.0], np.cumsum(v[:-1] * np.diff(tb))])
+        t = np.asarray(t, float) + self.lead
+        i = np.clip(np.searchsorted(tb, t, side="right") - 1, 0, tb.size - 1)
+        return sb[i] + v[i] * (t - tb[i])
+
+    def time_at_arc(self, s: np.ndarray) -> np.ndarray:
+        """Inverse of :meth:`arc_length` (every segment's speed must be > 0)."""
+        tb, _, _, v, _ = self._tab
+        sb = np.concatenate([[0.0], np.cumsum(v[:-1] * np.diff(tb))])
+        s = np.asarray(s, float)
+        i = np.clip(np.searchsorted(sb, s, side="right") - 1, 0, tb.size - 1)
+        return tb[i] + (s - sb[i]) / v[i] - self.lead
+
+    def threaded(self, t: np.ndarray, body: np.ndarray, lateral: np.ndarray) -> np.ndarray:
+        """World positions (n, ch, 3) of elements threaded on the track (water-pulled array).
+
+        Element ``ch`` at body (x, y, z) sits where the reference point was (x < 0) or will
+        be (x > 0) at arc length s(t) + x along the track, offset y + ``lateral[k]`` to
+        starboard of the track's course there and z below it: the tow point's path as in
+        the threading model. On a straight leg this is the rigid layout exactly.
+        """
+        t = np.asarray(t, float)
+        s = self.arc_length(t)
+        tn = self.time_at_arc(s[:, None] + body[None, :, 0])
+        p, _, _, crs, _ = self.evaluate(tn.reshape(-1))
+        h = np.deg2rad(crs).reshape(tn.shape)
+        by = body[None, :, 1] + np.asarray(lateral, float)[:, None]
+        out = np.empty(tn.shape + (3,))
+        out[..., 0] = p[:, 0].reshape(tn.shape) + by * np.cos(h)
+        out[..., 1] = p[:, 1].reshape(tn.shape) - by * np.sin(h)
+        out[..., 2] = p[:, 2].reshape(tn.shape) + body[None, :, 2]
+        return out
 
     def course(self, t: np.ndarray) -> np.ndarray:
         """Course (deg true) at times t."""
@@ -61,6 +104,8 @@ class TrackMover:
 
 class FixedMover:
     """A static point (x, y, z)."""
+
+    is_static = True
 
     def __init__(self, position: np.ndarray) -> None:
         self.position = np.asarray(position, dtype=float).reshape(3)
@@ -80,6 +125,10 @@ class BodyOffsetMover:
     def __init__(self, ownship: TrackMover, offset: np.ndarray) -> None:
         self.own = ownship
         self.offset = np.asarray(offset, dtype=float).reshape(3)
+
+    @property
+    def is_static(self) -> bool:
+        return self.own.is_static
 
     def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         p, v, a, crs, w = self.own.evaluate(t)

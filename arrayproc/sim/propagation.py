@@ -8,7 +8,7 @@ c·τ = |x_R(t) − x_S(t − τ)|, found by fixed-point iteration (contraction 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -22,13 +22,21 @@ GRID = 32  # samples between exact reference retarded times
 @dataclass
 class PoseTrack:
     """Array pose at sample times: reference (x, y) (n, 2), depth (n,), sin/cos of heading,
-    lateral offset (n,) of every element (m, starboard)."""
+    lateral offset (n,) of every element (m, starboard); ``epos`` (n, ch, 3) element world
+    positions of a bending array (zero rows: rigid, built from the rest by the kernels)."""
 
     rpos: np.ndarray
     rdepth: np.ndarray
     sin_h: np.ndarray
     cos_h: np.ndarray
     lateral: np.ndarray
+    epos: np.ndarray = field(default_factory=lambda: np.zeros((0, 1, 3)))
+
+    def window(self, i0: int, i1: int) -> PoseTrack:
+        """Samples [i0, i1) of the pose."""
+        return PoseTrack(self.rpos[i0:i1], self.rdepth[i0:i1], self.sin_h[i0:i1],
+                         self.cos_h[i0:i1], self.lateral[i0:i1],
+                         self.epos[i0:i1] if self.epos.shape[0] else self.epos)
 
     @property
     def ref3(self) -> np.ndarray:
@@ -41,6 +49,8 @@ def retarded_time(receiver: np.ndarray, t: np.ndarray, mover, c: float) -> np.nd
     Fixed-point iteration, a fixed number of times: the error shrinks by |v_S|/c per step
     (< 0.01), from ≤ τ·|v_S|/c, so 10 steps leave < 1e-15 s for ship speeds."""
     tau = np.linalg.norm(receiver - mover.state3(t)[0], axis=1) / c
+    if getattr(mover, "is_static", False):  # a fixed point: exact at once
+        return tau
     for _ in range(N_ITER):
         tau = np.linalg.norm(receiver - mover.state3(t - tau)[0], axis=1) / c
     return tau

@@ -15,9 +15,17 @@ import numpy as np
 from arrayproc.dsp.fracdelay import HALF_WIDTH, OVERSAMPLING, default_table
 from arrayproc.errors import ConfigError
 from arrayproc.io.recording import RecordingWriter
-from arrayproc.sim._propagate_kernels import oneway_accumulate
+from arrayproc.sim._propagate_kernels import oneway_accumulate, table_accumulate
 from arrayproc.sim.active import ActiveSim, PingTrain
+from arrayproc.sim.bellhop_paths import FamilyPaths, hilbert_fir, quadrature, reference_delay
 from arrayproc.sim.motion import BodyOffsetMover, TrackMover
+from arrayproc.sim.multipath import (
+    ImageMover,
+    images,
+    path_sin_grazing,
+    rough_exponent,
+    roughness_factor,
+)
 from arrayproc.sim.noise import ambient_noise
 from arrayproc.sim.propagation import LossLaw, PoseTrack, grid_nodes, retarded_time
 from arrayproc.sim.scenario import Scenario, load_scenario
@@ -57,6 +65,7 @@ class Simulator:
                             + np.max(np.abs(self.lateral_offsets)))
         self.own = TrackMover(scen.ownship, arr.depth)
         self.loss = LossLaw(scen.propagation)
+        self.images = images(scen.propagation.multipath)
         self.table = default_table()
         # passive sources (and the tow ship)
         self.sources: list[tuple[object, SourceSignal | PingTrain, float]] = []
@@ -72,12 +81,19 @@ class Simulator:
                 mover = TrackMover(sp.traj, sp.depth)
                 movers[sp.name] = mover
             self.sources.append((mover, SourceSignal(sp, mover, self.fs_src, seed, i), sp.depth))
+        self.bellhop = None  # source depth -> BELLHOP ray families
+        if scen.propagation.bellhop is not None:
+            self.bellhop = {float(d): FamilyPaths(scen.propagation.bellhop, self.c, float(d),
+                                                  float(arr.depth))
+                            for d in sorted({float(x[2]) for x in self.sources})}
+            self._hilbert = hilbert_fir()
         self.noise = (ambient_noise(scen.noise, self.fs, self.n_channels, seed)
                       if scen.noise is not None else None)
         self.active = None
         if scen.active is not None:
             self.active = ActiveSim(scen.active, self.own, self.loss, self.c, self.fs,
-                                    self.fs_src, scen.duration, seed, self.extent, movers)
+                                    self.fs_src, scen.duration, seed, self.extent, movers,
+                                    scen.propagation.multipath)
             if scen.active.direct:
                 pt = PingTrain(self.active)
                 self.sources.append((pt.mover, pt, pt.depth))
@@ -109,12 +125,18 @@ class Simulator:
         p, _, _, crs, _ = self.own.evaluate(t)
         h = np.deg2rad(crs)
         idx = np.clip((t / self.s.array.lateral_snapshot).astype(np.int64), 0, self.n_snap - 1)
-        return PoseTrack(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
-                    np.sin(h), np.cos(h), np.ascontiguousarray(self.lateral_offsets[idx]))
+        lat = np.ascontiguousarray(self.lateral_offsets[idx])
+        pose = PoseTrack(np.ascontiguousarray(p[:, :2]), np.ascontiguousarray(p[:, 2]),
+                         np.sin(h), np.cos(h), lat)
+        if self.s.array.shape == "water_pulled":
+            pose.epos = np.ascontiguousarray(self.own.threaded(t, self.body, lat))
+        return pose
 
     def element_positions(self, t: float) -> np.ndarray:
         """World positions (ch, 3) of the elements at time t (s), as the kernels build them."""
         ps = self.pose(np.array([float(t)]))
+        if ps.epos.shape[0]:
+            return ps.epos[0].copy()
         by = self.body[:, 1] + ps.lateral[0]
         x = ps.rpos[0, 0] + self.body[:, 0] * ps.sin_h[0] + by * ps.cos_h[0]
         y = ps.rpos[0, 1] + self.body[:, 0] * ps.cos_h[0] - by * ps.sin_h[0]
@@ -134,22 +156,55 @@ class Simulator:
         # (the kernels solve each element's retarded time exactly from there)
         tg = grid_nodes(k0, k1, self.fs)
         ref_g = self.own.state3(tg)[0]
+        mp = self.s.propagation.multipath
+        ones = np.ones(n)
         for mover, sig, depth in self.sources:
-            tau = np.interp(t, tg, retarded_time(ref_g, tg, mover, self.c))
-            sp, sv, sa = mover.state3(t - tau)
-            m0 = int(np.floor((t[0] - tau.max() - margin) * self.fs_src)) - HALF_WIDTH - 2
-            m1 = int(np.ceil((t[-1] - tau.min() + margin) * self.fs_src)) + HALF_WIDTH + 3
+            if self.bellhop is not None:
+                self._render_bellhop(out, t, tg, ref_g, pose, mover, sig, depth, margin)
+                continue
+            paths = []  # per image path: reference retarded times, coefficient, roughness
+            for img in self.images:
+                im = ImageMover(mover, img)
+                tau = np.interp(t, tg, retarded_time(ref_g, tg, im, self.c))
+                paths.append((im, tau, img.coef, rough_exponent(mp, img, self.c)))
+            tmax = max(float(p[1].max()) for p in paths)
+            tmin = min(float(p[1].min()) for p in paths)
+            m0 = int(np.floor((t[0] - tmax - margin) * self.fs_src)) - HALF_WIDTH - 2
+            m1 = int(np.ceil((t[-1] - tmin + margin) * self.fs_src)) + HALF_WIDTH + 3
             buf = np.ascontiguousarray(sig.block(m0, m1))
             mode, r_t, gtab, g0, gdr = self.loss.kernel_args(depth, float(self.own.depth))
-            oneway_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
-                              pose.cos_h, pose.lateral, self.body, self.c, buf,
-                              m0 / self.fs_src, self.fs_src, self.table, mode, r_t, gtab, g0,
-                              gdr, 1.0)
+            for im, tau, coef, rough in paths:
+                sp, sv, sa = im.state3(t - tau)
+                oneway_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
+                                  pose.cos_h, pose.lateral, self.body, self.c, buf,
+                                  m0 / self.fs_src, self.fs_src, self.table, mode, r_t, gtab,
+                                  g0, gdr, coef, ones, pose.epos, rough)
         if self.active is not None:
             self.active.render(out, k0, t, pose, self.body)
         if self.noise is not None:
             out += self.noise.block(k0, k1)
         return out
+
+    def _render_bellhop(self, out: np.ndarray, t: np.ndarray, tg: np.ndarray,
+                        ref_g: np.ndarray, pose: PoseTrack, mover: object, sig: object,
+                        depth: float, margin: float) -> None:
+        """One source's field as the sum of its BELLHOP ray families."""
+        fam = self.bellhop[float(depth)]
+        paths = []
+        for i in range(len(fam.tables)):
+            tau = np.interp(t, tg, reference_delay(fam, i, ref_g[:, :2], tg, mover))
+            paths.append((i, tau))
+        tmax = max(float(p[1].max()) for p in paths)
+        tmin = min(float(p[1].min()) for p in paths)
+        m0 = int(np.floor((t[0] - tmax - margin) * self.fs_src)) - HALF_WIDTH - 2
+        m1 = int(np.ceil((t[-1] - tmin + margin) * self.fs_src)) + HALF_WIDTH + 3
+        buf, bufq = quadrature(sig.block, m0, m1, self._hilbert)
+        for i, tau in paths:
+            sp, sv, sa = mover.state3(t - tau)
+            table_accumulate(out, tau, sp, sv, sa, t, pose.rpos, pose.rdepth, pose.sin_h,
+                             pose.cos_h, pose.lateral, self.body, pose.epos, buf, bufq,
+                             m0 / self.fs_src, self.fs_src, self.table, fam.tables[i],
+                             fam.r0, fam.dr, 1.0)
 
     # -- truth -----------------------------------------------------------------------------
     def truth(self) -> tuple[dict, dict]:
@@ -172,6 +227,12 @@ class Simulator:
                  "tonal_freqs": np.array([x.freq for x in sp.tonals], float),
                  "tonal_levels_db": np.array([x.level_db for x in sp.tonals], float),
                  "tonal_phases_deg": np.rad2deg(sig.phases)}
+            if any(x.drift_hz_per_s or x.unsteady for x in sp.tonals):
+                a["tonal_drift_hz_per_s"] = np.array([x.drift_hz_per_s for x in sp.tonals])
+                a["tonal_coherence_time"] = np.array([
+                    np.inf if x.coherence_time is None else x.coherence_time for x in sp.tonals])
+                a["tonal_fading_db"] = np.array([x.fading_db for x in sp.tonals])
+                a["tonal_fading_time"] = np.array([x.fading_time for x in sp.tonals])
             if sp.broadband is not None:
                 bb = sp.broadband
                 a["broadband_band"] = np.array(bb.band, float)
@@ -182,6 +243,10 @@ class Simulator:
                 spec_l = sig.spectral_level_db(tt)
                 d["broadband_level_db"] = spec_l
                 d["broadband_source_level_db"] = spec_l + 10 * np.log10(sig.bandwidth)
+            if self.s.propagation.multipath is not None:
+                d.update(self._path_truth(mover, sp.depth, tt))
+                a["path_surface_bounces"] = np.array([im.n_surface for im in self.images])
+                a["path_bottom_bounces"] = np.array([im.n_bottom for im in self.images])
             src[sp.name] = d
             attrs[f"sources/{sp.name}"] = a
         if src:
@@ -190,7 +255,12 @@ class Simulator:
         groups["array"] = {"positions": self.body, "nominal_positions": self.nominal,
                            "lateral_time": np.arange(self.n_snap) * arr.lateral_snapshot,
                            "lateral_offset": self.lateral_offsets}
-        attrs["array"] = {"position_error_std": arr.position_error_std,
+        if arr.shape == "water_pulled":  # the shape the elements took, at the truth times
+            lat = self.lateral_offsets[np.clip((tt / arr.lateral_snapshot).astype(np.int64),
+                                               0, self.n_snap - 1)]
+            groups["array"]["shape_time"] = tt
+            groups["array"]["element_positions"] = self.own.threaded(tt, self.body, lat)
+        attrs["array"] = {"shape": arr.shape, "position_error_std": arr.position_error_std,
                           "lateral_std": arr.lateral_std,
                           "lateral_snapshot": arr.lateral_snapshot, "depth": arr.depth}
         if self.active is not None:
@@ -198,6 +268,19 @@ class Simulator:
             groups.update(act)
             attrs["pings"] = act_attrs
         return groups, attrs
+
+    def _path_truth(self, mover: object, depth: float, tt: np.ndarray) -> dict:
+        """Per image path at the array reference point: travel time (s) and signed amplitude
+        gain (reflections × roughness / path length, 1/m), columns in image order."""
+        ref = self.own.state3(tt)[0]
+        delay, amp = [], []
+        for img in self.images:
+            tau = retarded_time(ref, tt, ImageMover(mover, img), self.c)
+            sin_g = path_sin_grazing(img.depth(depth), ref[:, 2], self.c * tau)
+            rough = roughness_factor(self.s.propagation.multipath, img, sin_g, self.c)
+            delay.append(tau)
+            amp.append(img.coef * rough / np.maximum(self.c * tau, 1.0))
+        return {"path_delay_s": np.column_stack(delay), "path_amplitude": np.column_stack(amp)}
 
     def nav(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(time, position (n, 2), heading deg, depth) of the array reference point."""

@@ -19,7 +19,8 @@ from arrayproc.config import read_toml
 from arrayproc.dsp.fracdelay import PASSBAND
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
-from arrayproc.io.geometry import line_array
+from arrayproc.io.geometry import line_array, triplet_array, twin_line_array
+from arrayproc.sim.unsteady import NODE
 
 
 def _speed(t: _Table, required: bool = True) -> float | None:
@@ -73,6 +74,14 @@ class Tonal:
     freq: float  # Hz
     level_db: float  # dB re 1 µPa @ 1 m (RMS)
     phase_deg: float | None = None  # None: random (seeded)
+    drift_hz_per_s: float = 0.0  # linear frequency drift, f(t) = freq + drift·t
+    coherence_time: float | None = None  # s, random-walk phase (None: coherent)
+    fading_db: float = 0.0  # std of the log-amplitude fade, dB (0: steady)
+    fading_time: float = 10.0  # s, correlation time of the fade
+
+    @property
+    def unsteady(self) -> bool:
+        return self.coherence_time is not None or self.fading_db > 0
 
 
 @dataclass
@@ -101,6 +110,40 @@ class ArraySpec:
     position_error_std: float = 0.0
     lateral_std: float = 0.0
     lateral_snapshot: float = 1.0
+    shape: str = "rigid"  # "rigid" | "water_pulled" (elements thread the tow point's path)
+
+
+@dataclass
+class MultipathSpec:
+    """``[propagation] multipath``: image sources in a flat waveguide (arrayproc.sim.multipath).
+
+    ``bottom_depth`` None: no bottom (surface image only); ``surface`` False: no surface
+    reflection (bottom image only). ``order``: most reflections on a path. The rough surface's
+    coherent reflection uses the Rayleigh parameter Γ = 2kσ sin θ at ``roughness_freq``.
+    """
+
+    surface: bool = True
+    bottom_depth: float | None = None  # m
+    bottom_loss_db: float = 0.0  # dB per bottom bounce
+    order: int = 1
+    surface_rms_height: float = 0.0  # m (σ)
+    roughness_freq: float = 0.0  # Hz (k = 2π f / c of the Rayleigh parameter)
+
+
+@dataclass
+class BellhopSpec:
+    """``multipath = "bellhop"`` with ``[propagation.bellhop]``: a range-independent
+    environment whose BELLHOP arrivals are the propagation paths."""
+
+    depth: float  # m, flat bottom
+    freq: float  # Hz, frequency of the ray trace (amplitudes and phases)
+    max_range: float  # m
+    range_step: float = 10.0  # m
+    ssp: np.ndarray | None = None  # (n, 2) depth m, speed m/s; None: isovelocity
+    bottom_speed: float = 1600.0
+    bottom_density: float = 1.8  # g/cm³
+    bottom_atten: float = 0.5  # dB/λ
+    n_beams: int = 0  # 0: BELLHOP chooses
 
 
 @dataclass
@@ -110,6 +153,8 @@ class Propagation:
     table_range: np.ndarray | None = None  # m
     table_tl: np.ndarray | None = None  # dB, or a TLTable object resolved per depth pair
     table_path: str | None = None
+    multipath: MultipathSpec | None = None
+    bellhop: BellhopSpec | None = None
 
 
 @dataclass
@@ -126,6 +171,29 @@ class TargetSpec:
     ts_db: float
     distortion: float = 0.0  # s, thesis eq. (4.6) α
     source: str | None = None  # reuse a passive source's track
+    length: float = 0.0  # m: an extended target, highlights spread along its course
+    highlights: int = 1  # point scatterers along the length, TS split evenly
+
+
+@dataclass
+class ReverbSpec:
+    """Boundary reverberation: random Lambert scatterers on the bottom or the surface."""
+
+    boundary: str  # "bottom" | "surface"
+    depth: float  # m, the boundary's depth (0 for the surface)
+    strength_db: float  # Lambert parameter 10 log10 μ, dB (S = 10 log10 μ + 10 log10 sin θi sin θs)
+    density: float  # scatterers per m²
+    area: np.ndarray  # [xmin, xmax, ymin, ymax] m
+
+
+@dataclass
+class FeatureSpec:
+    """A bottom feature (ridge, wreck): static point scatterers at chosen positions."""
+
+    name: str
+    points: np.ndarray  # (n, 2) x, y m
+    depth: float
+    ts_db: float  # per point
 
 
 @dataclass
@@ -158,6 +226,8 @@ class ActiveSpec:
     targets: list[TargetSpec]
     clutter: ClutterSpec | None
     times: np.ndarray | None = None  # explicit transmission times, s
+    reverberation: list[ReverbSpec] = field(default_factory=list)
+    features: list[FeatureSpec] = field(default_factory=list)
 
     @property
     def waveform(self) -> Any:
@@ -250,7 +320,17 @@ def _tonals(t: _Table, fs: float) -> list[Tonal]:
         if f > PASSBAND * fs:
             raise tt.err("freq", f"{f} Hz is above the simulator's band "
                          f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-        out.append(Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None)))
+        ton = Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None),
+                    tt.num("drift_hz_per_s", 0.0), tt.num("coherence_time", None, positive=True),
+                    tt.num("fading_db", 0.0, nonneg=True),
+                    tt.num("fading_time", 10.0, positive=True))
+        node = NODE / (2.0 * fs)  # the processes' grid spacing (source rate 2·fs)
+        for key, v in (("coherence_time", ton.coherence_time), ("fading_time",
+                                                                  ton.fading_time)):
+            if v is not None and v < 50 * node and (key == "coherence_time" or ton.fading_db):
+                raise tt.err(key, f"{v:g} s is too short for the simulator's grid of "
+                             f"{node * 1e3:.2f} ms (at least {50 * node:.3g} s)")
+        out.append(ton)
         tt.done()
     return out
 
@@ -271,6 +351,74 @@ def _broadband(t: _Table | None, fs: float) -> Broadband | None:
     slope = t.num("slope_db_per_octave", 0.0)
     t.done()
     return Broadband((float(band[0]), float(band[1])), level, model, slope)
+
+
+def _multipath(pt: _Table, loss: str) -> MultipathSpec:
+    """The ``multipath = { … }`` inline table of ``[propagation]``."""
+    if not isinstance(pt.raw("multipath"), dict):
+        raise pt.err("multipath", "must be a table {surface, bottom_depth, bottom_loss_db, "
+                     f"order, …}}, got {pt.raw('multipath')!r}")
+    if loss != "spherical":
+        raise pt.err("multipath", f"image sources need loss = \"spherical\" (a {loss} law "
+                     "already stands for the boundaries' contribution)")
+    mt = pt.sub("multipath")
+    spec = MultipathSpec(mt.bool_("surface", True), mt.num("bottom_depth", None, positive=True),
+                         mt.num("bottom_loss_db", 0.0, nonneg=True), mt.int_("order", 1, minimum=0),
+                         mt.num("surface_rms_height", 0.0, nonneg=True),
+                         mt.num("roughness_freq", 0.0, nonneg=True))
+    if spec.surface_rms_height > 0 and spec.roughness_freq <= 0:
+        raise mt.err("roughness_freq", "required (> 0 Hz) with surface_rms_height > 0: the "
+                     "Rayleigh parameter 2kσ sin θ is evaluated at this frequency")
+    if spec.surface_rms_height > 0 and not spec.surface:
+        raise mt.err("surface_rms_height", "needs surface = true")
+    mt.done()
+    return spec
+
+
+def _bellhop(pt: _Table, loss: str, c: float) -> BellhopSpec:
+    """``multipath = "bellhop"`` and its ``[propagation.bellhop]`` environment."""
+    if loss != "spherical":
+        raise pt.err("multipath", f"BELLHOP arrivals replace the loss law; leave loss = "
+                     f"\"spherical\" (got {loss!r})")
+    bt = pt.sub("bellhop", required=True)
+    ssp = bt.matrix("ssp", 2)
+    spec = BellhopSpec(bt.num("depth", required=True, positive=True),
+                       bt.num("freq", required=True, positive=True),
+                       bt.num("max_range", required=True, positive=True),
+                       bt.num("range_step", 10.0, positive=True), ssp,
+                       bt.num("bottom_speed", 1600.0, positive=True),
+                       bt.num("bottom_density", 1.8, positive=True),
+                       bt.num("bottom_atten", 0.5, nonneg=True),
+                       bt.int_("n_beams", 0, minimum=0))
+    if ssp is not None and (np.any(np.diff(ssp[:, 0]) <= 0) or ssp[0, 0] != 0.0
+                            or ssp[-1, 0] != spec.depth):
+        raise bt.err("ssp", "depths must increase from 0 to the bottom depth")
+    if spec.max_range / spec.range_step > 20000:
+        raise bt.err("range_step", "more than 20000 ranges; use a coarser step")
+    bt.done()
+    return spec
+
+
+def _check_waveguide(mp: MultipathSpec, array: ArraySpec, sources: list[SourceSpec],
+                     active: ActiveSpec | None, file: str) -> None:
+    """Every source, element, target and the projector lie in the water, 0 <= z <= D."""
+    d = mp.bottom_depth if mp.bottom_depth is not None else math.inf
+    where = [("[array] depth (elements)", array.depth + array.positions[:, 2])]
+    where += [(f"source {sp.name!r} depth", np.array([sp.depth])) for sp in sources]
+    if active is not None:
+        where += [(f"target {tg.name!r} depth", np.array([tg.depth])) for tg in active.targets]
+        where.append(("[active] offset (projector depth)",
+                      np.array([array.depth + active.offset[2]])))
+        if active.clutter is not None:
+            where.append(("[active.clutter] depth", np.array([active.clutter.depth])))
+        where += [("[active.reverberation] depth", np.array([r.depth]))
+                  for r in active.reverberation]
+        where += [(f"feature {f.name!r} depth", np.array([f.depth])) for f in active.features]
+    for what, z in where:
+        if np.any(z < 0) or np.any(z > d):
+            raise ConfigError(f"{file}: [propagation] multipath: {what} "
+                              f"{float(z.min()):g}…{float(z.max()):g} m is outside the water "
+                              f"(0 … {d:g} m)")
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -302,11 +450,18 @@ def parse_scenario(data: dict, file: str = "<scenario>",
 
     # array
     at = root.sub("array", required=True)
-    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron"))
-    if kind == "line":
+    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron", "twin",
+                                             "triplet"))
+    if kind in ("line", "twin", "triplet"):
         n = at.int_("n", required=True, minimum=1)
         spacing = at.num("spacing", required=True, positive=True)
-        pos = line_array(n, spacing)
+        if kind == "twin":
+            pos = twin_line_array(n, spacing, at.num("separation", required=True,
+                                                     positive=True))
+        elif kind == "triplet":
+            pos = triplet_array(n, spacing, at.num("radius", required=True, positive=True))
+        else:
+            pos = line_array(n, spacing)
     elif kind == "tetrahedron":
         pos = tetrahedron(at.num("side", required=True, positive=True))
     else:
@@ -314,7 +469,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     array = ArraySpec(pos, at.num("depth", 0.0),
                       at.num("position_error_std", 0.0, nonneg=True),
                       at.num("lateral_std", 0.0, nonneg=True),
-                      at.num("lateral_snapshot", 1.0, positive=True))
+                      at.num("lateral_snapshot", 1.0, positive=True),
+                      at.str_("shape", "rigid", choices=("rigid", "water_pulled")))
     at.done()
 
     # ownship
@@ -325,6 +481,10 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         own, own_static = _trajectory(ot)
         _check_speed(ot, own, c)
         ot.done()
+    if array.shape == "water_pulled" and min(
+            [sg.speed for sg in own.segments] or [0.0]) <= 0:
+        raise at.err("shape", "water_pulled needs an ownship moving at speed > 0 on every "
+                     "leg (the elements follow the path the tow point took)")
 
     # sources
     sources: list[SourceSpec] = []
@@ -368,6 +528,12 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                     raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
                                  "and range_m must increase")
                 prop.table_range, prop.table_tl = r, tl
+        if pt.has("multipath") and pt.raw("multipath") == "bellhop":
+            prop.bellhop = _bellhop(pt, prop.loss, c)
+        elif pt.has("multipath"):
+            prop.multipath = _multipath(pt, prop.loss)
+        if pt.has("bellhop") and prop.bellhop is None:
+            raise pt.err("bellhop", "only with multipath = \"bellhop\"")
         pt.done()
 
     # noise (+ tow ship)
@@ -398,6 +564,21 @@ def parse_scenario(data: dict, file: str = "<scenario>",
 
     active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
     root.done()
+    if prop.multipath is not None:
+        _check_waveguide(prop.multipath, array, sources, active, file)
+    if prop.bellhop is not None:
+        if active is not None:
+            raise ConfigError(f"{file}: [propagation] multipath = \"bellhop\" is for passive "
+                              "sources only (active echoes: use the image-source table)")
+        _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
+                         None, file)
+    for sp in sources:
+        for i, ton in enumerate(sp.tonals):
+            f_end = ton.freq + ton.drift_hz_per_s * duration
+            if ton.drift_hz_per_s and not (0 < f_end <= PASSBAND * fs):
+                raise ConfigError(f"{file}: source {sp.name!r} tonal {i}: drift_hz_per_s takes "
+                                  f"the tonal to {f_end:g} Hz by the end, outside (0, "
+                                  f"{PASSBAND * fs:g}] Hz")
     return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
                     nav_interval, array, own, own_static, sources, prop, noise, active)
 
@@ -505,6 +686,55 @@ def _check_overlap(t: _Table, spec: ActiveSpec) -> None:
                     f"{dur[i]:g} s) lasts past the next ping ({t_next[i]:g} s later)")
 
 
+#: Most reverberation scatterers one scenario may ask for (each is rendered per ping).
+MAX_REVERB_SCATTERERS = 200_000
+
+
+def _reverb(t: _Table) -> ReverbSpec:
+    """One ``[[active.reverberation]]`` table."""
+    boundary = t.str_("boundary", "bottom", choices=("bottom", "surface"))
+    depth = (t.num("depth", required=True, positive=True) if boundary == "bottom"
+             else t.num("depth", 0.0))
+    if boundary == "surface" and depth != 0.0:
+        raise t.err("depth", "the surface is at depth 0")
+    area = t.vec("area", 4, required=True)
+    if not (area[0] < area[1] and area[2] < area[3]):
+        raise t.err("area", "must be [xmin, xmax, ymin, ymax] with min < max")
+    spec = ReverbSpec(boundary, depth, t.num("scattering_strength_db", required=True),
+                      t.num("density", required=True, positive=True), area)
+    n = spec.density * (area[1] - area[0]) * (area[3] - area[2])
+    if n > MAX_REVERB_SCATTERERS:
+        raise t.err("density", f"{n:.0f} scatterers over the area (at most "
+                    f"{MAX_REVERB_SCATTERERS}); lower the density or the area")
+    t.done()
+    return spec
+
+
+def _feature(t: _Table, i: int) -> FeatureSpec:
+    """One ``[[active.feature]]``: ``position = [x, y]`` (a wreck) or ``line = [[x0, y0],
+    [x1, y1]]`` with ``count`` points (a ridge)."""
+    name = t.str_("name", f"feature{i}")
+    _plain_name(t, "name", name, "the feature's scatterers")
+    if t.has("position") == t.has("line"):
+        raise t.err("position", "give position = [x, y] (a point) or line = [[x0, y0], "
+                    "[x1, y1]] with count (a ridge)")
+    if t.has("position"):
+        pts = t.vec("position", 2).reshape(1, 2)
+        if t.has("count"):
+            raise t.err("count", "only with line")
+    else:
+        ends = t.matrix("line", 2)
+        if ends.shape != (2, 2):
+            raise t.err("line", "must be two points [[x0, y0], [x1, y1]]")
+        n = t.int_("count", 10, minimum=1)
+        u = np.linspace(0.0, 1.0, n) if n > 1 else np.array([0.5])
+        pts = ends[0] + u[:, None] * (ends[1] - ends[0])
+    spec = FeatureSpec(name, pts, t.num("depth", required=True),
+                       t.num("ts_db", required=True))
+    t.done()
+    return spec
+
+
 def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
     level = _level(t, "level_db", required=True)
     several = t.has("waveforms") or t.has("times")
@@ -531,8 +761,10 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
             depth = tt.num("depth", 0.0)
         ts = tt.num("ts_db", required=True)
         alpha = tt.num("distortion_ms", 0.0, nonneg=True) * 1e-3
+        length = tt.num("length", 0.0, nonneg=True)
+        nh = tt.int_("highlights", 5 if length > 0 else 1, minimum=1)
         tt.done()
-        targets.append(TargetSpec(name, traj, depth, ts, alpha, src))
+        targets.append(TargetSpec(name, traj, depth, ts, alpha, src, length, nh))
     clutter = None
     ct = t.sub("clutter")
     if ct is not None:
@@ -543,9 +775,11 @@ def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> Activ
                               ct.num("depth", 0.0), ct.num("ts_mean_db", -10.0),
                               ct.num("ts_std_db", 5.0, nonneg=True))
         ct.done()
+    reverb = [_reverb(rt) for rt in t.subs("reverberation")]
+    features = [_feature(ft, i) for i, ft in enumerate(t.subs("feature"))]
     t.done()
     spec = ActiveSpec(waves, levels, sched, level, interval, first, count, offset, direct,
-                      targets, clutter, times)
+                      targets, clutter, times, reverb, features)
     if several:
         _check_overlap(t, spec)
     return spec

@@ -3,7 +3,9 @@
 A source's signal s(t) (Pa at 1 m, t = emission time in s since the recording's start) is the
 sum of
 - tonals A cos(2π f t + φ), A = √2 · 1 µPa · 10^(SL/20) (SL = RMS level, dB re 1 µPa @ 1 m),
-  φ given or drawn from the source's own seeded stream;
+  φ given or drawn from the source's own seeded stream; optionally unsteady: a linear
+  frequency drift (phase 2π(f t + ḟ t²/2)), a random-walk phase of coherence time T_c and a
+  log-amplitude fade (``arrayproc.sim.unsteady``);
 - band-limited Gaussian noise of one-sided spectral level L (dB re 1 µPa²/Hz @ 1 m) over
   [lo, hi], optionally tilted by ``slope_db_per_octave``; with ``model = "speed"`` the band's
   total level follows SPL paper eq. (12), SL(v) = 170 + 53 log10(v / 5.14 m/s) dB re 1 µPa
@@ -21,9 +23,11 @@ from arrayproc.acoustics.source_level import ROSS_SURFACE_SHIP
 from arrayproc.sim.motion import TrackMover
 from arrayproc.sim.scenario import Broadband, SourceSpec
 from arrayproc.sim.signals import UPA2, ShapedNoise
+from arrayproc.sim.unsteady import fading_gain, random_walk_phase
 
 KEY_TONAL = 11
 KEY_BROADBAND = 12
+KEY_UNSTEADY = 13
 LEVEL_GRID = 256  # source samples between evaluations of the speed-dependent level
 
 
@@ -68,6 +72,15 @@ class SourceSignal:
         self.amps = np.array([tonal_amplitude(t.level_db) for t in spec.tonals])
         self.phases = np.array([np.deg2rad(t.phase_deg) if t.phase_deg is not None
                                 else rand_phase[i] for i, t in enumerate(spec.tonals)])
+        self.drifts = np.array([t.drift_hz_per_s for t in spec.tonals], dtype=float)
+        #: per tonal: random-walk phase process (or None), fading process and normalisation
+        self.unsteady = []
+        for i, t in enumerate(spec.tonals):
+            ph = (random_walk_phase(t.coherence_time, fs_src, seed, (KEY_UNSTEADY, index, i, 0))
+                  if t.coherence_time is not None else None)
+            fade = (fading_gain(t.fading_db, t.fading_time, fs_src, seed,
+                                (KEY_UNSTEADY, index, i, 1)) if t.fading_db > 0 else None)
+            self.unsteady.append((ph, fade))
         self.noise = None
         bb = spec.broadband
         if bb is not None:
@@ -90,9 +103,20 @@ class SourceSignal:
         """Samples m0 … m1−1 (float64, Pa at 1 m)."""
         m = np.arange(m0, m1, dtype=np.int64)
         out = np.zeros(m.size)
-        for f, a, ph in zip(self.freqs, self.amps, self.phases):
+        for f, a, ph, dr, (walk, fade) in zip(self.freqs, self.amps, self.phases, self.drifts,
+                                              self.unsteady):
             x = f * m.astype(float) / self.fs_src  # cycles; reduce before the cosine
-            out += a * np.cos(2 * np.pi * (x - np.floor(x)) + ph)
+            if dr != 0.0:  # f(t) = f + drift·t: phase 2π(f t + drift t²/2)
+                tm = m.astype(float) / self.fs_src
+                x = x + 0.5 * dr * tm * tm
+            arg = 2 * np.pi * (x - np.floor(x)) + ph
+            if walk is not None:
+                arg = arg + walk.at_samples(m0, m1)
+            if fade is None:
+                out += a * np.cos(arg)
+            else:
+                proc, norm = fade
+                out += a * norm * 10 ** (proc.at_samples(m0, m1) / 20.0) * np.cos(arg)
         if self.noise is not None:
             nb = self.noise.block(m0, m1)[:, 0]
             if self.spec.broadband.model == "flat":

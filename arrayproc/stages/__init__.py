@@ -34,6 +34,9 @@ TYPES: dict[str, str] = {
     "matched_filter": "arrayproc.stages.active.matched_filter",
     "cfar": "arrayproc.stages.active.detect",
     "nb_ekf": "arrayproc.stages.narrowband.nb_ekf",
+    "lr_cbf": "arrayproc.stages.beamform.lr_cbf",
+    "mvdr": "arrayproc.stages.beamform.mvdr",
+    "music": "arrayproc.stages.beamform.music",
 }
 
 

@@ -161,7 +161,8 @@ def test_propagation_is_linear_in_the_source_signal(a, b, seed):
         out = np.zeros((n, nch), np.float32)
         oneway_accumulate(out, tau, sp, z, z, t, rpos, np.full(n, 10.0), np.zeros(n),
                           np.ones(n), np.zeros(n), body, C, sig, 0.0, 2000.0, default_table(),
-                          0, 1.0, np.zeros(2), 0.0, 1.0, 1.0)
+                          0, 1.0, np.zeros(2), 0.0, 1.0, 1.0, np.ones(n),
+                          np.zeros((0, nch, 3)), 0.0)
         return out.astype(float)
 
     lhs = run(a * s1 + b * s2)

@@ -28,7 +28,8 @@ from arrayproc.acoustics.tl.shd import read_shd
 from arrayproc.acoustics.tl.table import TLTable
 from arrayproc.errors import ArrayprocError
 
-__all__ = ["BellhopEnv", "MUNK_APPENDIX", "write_env", "find_executable", "run_bellhop"]
+__all__ = ["BellhopEnv", "MUNK_APPENDIX", "write_env", "find_executable", "run_bellhop",
+           "run_arrivals"]
 
 #: The SPL paper's appendix sound-speed profile (depth m, speed m/s). The printed "0.008" row is
 #: an extraction error for 800.0 m (the profile is sorted in depth and 1504.30 m/s is the Munk
@@ -128,6 +129,39 @@ def find_executable(name: str = "bellhopcxx") -> str:
     if not os.access(cand, os.X_OK):
         cand.chmod(cand.stat().st_mode | 0o111)
     return str(cand)
+
+
+def _run(env: BellhopEnv, executable: str, tmpp: Path, timeout_s: float, out: str) -> Path:
+    """Write ``env`` into ``tmpp``, run the executable there, return its output file."""
+    exe = find_executable(executable) if os.sep not in executable else executable
+    is_cxx = "cxx" in Path(exe).name or "cuda" in Path(exe).name
+    write_env(env, tmpp / "run.env")
+    cmd = [exe, "-2", "-1", "run"] if is_cxx else [exe, "run"]
+    envvars = dict(os.environ)
+    if not is_cxx:
+        gdir = _gfortran_dir(tmpp)
+        if gdir:
+            envvars["LD_LIBRARY_PATH"] = gdir + os.pathsep + envvars.get("LD_LIBRARY_PATH", "")
+    proc = subprocess.run(cmd, cwd=tmpp, env=envvars, capture_output=True, text=True,
+                          timeout=timeout_s, check=False)
+    res = tmpp / out
+    if proc.returncode != 0 or not res.exists():
+        prt = (tmpp / "run.prt").read_text(errors="replace")[-2000:] if (
+            tmpp / "run.prt").exists() else ""
+        raise ArrayprocError(f"{exe} failed (status {proc.returncode}): "
+                             f"{proc.stderr.strip()[-500:]} {prt}")
+    return res
+
+
+def run_arrivals(env: BellhopEnv, executable: str = "bellhopcxx",
+                 workdir: str | Path | None = None, timeout_s: float = 600.0) -> list:
+    """Run BELLHOP in arrivals mode (run type ``'A'``) and read the ``.arr`` file: one
+    :class:`arrayproc.acoustics.tl.arrivals.Arrivals` per source depth."""
+    from arrayproc.acoustics.tl.arrivals import read_arr
+
+    env = BellhopEnv(**{**env.__dict__, "run_type": "A"})
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        return read_arr(_run(env, executable, Path(tmp), timeout_s, "run.arr"))
 
 
 def run_bellhop(env: BellhopEnv | None = None, executable: str = "bellhopcxx",

@@ -135,6 +135,7 @@ class Cfar(Stage):
                     yield Block(np.zeros(rows["time"].size), Domain.CONTACTS, b.t0, b.span,
                                 b.fs, b.positions, pose=b.pose, index=b.index, meta=meta)
                     cand, cells = [], 0
+                del b, planes, res  # the block's planes go before the next block is made
         finally:
             if pool is not None:
                 pool.shutdown()

@@ -8,7 +8,8 @@ channels x the ping's lags, with the ping's :class:`arrayproc.chain.domains.Ping
 0), ``fs_bb``, ``bandwidth``, ``duration`` (pulse length T, s), ``beam_index`` (indices into
 the ping's beams), ``cones`` (deg), ``last`` (the ping's final block) and ``cells`` (cells
 computed in the block). A ping's cube (e.g. 271 channels x 181 beams x 35 000 lags) is
-never held: one chunk at a time.
+never held: one block at a time, of at most ``chunk`` beams and ``block_mb`` MB (at 271
+channels x 32 580 lags one beam's plane is 35 MB, so two beams per block).
 
 The replicas come from the recording (``/active/waveforms``), so one chain serves any
 waveform; a Doppler-insensitive one (HFM, LFM) gets the single channel 0 m/s.
@@ -55,7 +56,9 @@ class MatchedFilter(Stage):
     params = {
         "range_rate": Param("table", {}, "range-rate channels {min, max, step}, m/s (default "
                             "+-15 m/s at the waveform's 3 dB Doppler resolution)"),
-        "chunk": Param("int", 8, "beams per output block", check=positive),
+        "chunk": Param("int", 8, "beams per output block at most", check=positive),
+        "block_mb": Param("float", 96.0, "largest output block, MB: fewer beams per block "
+                          "when chunk beams would exceed it (at least one per thread)"),
         "max_range_m": Param("float", 0.0, "longest range kept, m (0: the whole window)"),
         "bracket": Param("table", None, "{source, range_m, cone_deg}: bracket mode"),
         "range_doppler": Param("table", None, "{pings, cones, range_m}: write range_doppler"),
@@ -68,6 +71,8 @@ class MatchedFilter(Stage):
             range_rate_grid(self.range_rate, 1000.0, 1.0, 1500.0, False)
         except ConfigError as e:
             raise ConfigError(f"{w}: {e}") from None
+        if not self.block_mb > 0:
+            raise ConfigError(f"{w}: key 'block_mb' must be > 0 MB, got {self.block_mb}")
         if self.bracket is not None:
             b = dict(self.bracket)
             if set(b) - {"source", "range_m", "cone_deg"} or not isinstance(b.get("source"),
@@ -164,8 +169,9 @@ class MatchedFilter(Stage):
         nb, k = data.shape
         nl = self._n_lags(b)
         w = self._workers()
-        for a in range(0, nb, self.chunk):
-            idx = np.arange(a, min(nb, a + self.chunk))
+        per = self._per_block(rr.size * nl * 4, w)
+        for a in range(0, nb, per):
+            idx = np.arange(a, min(nb, a + per))
             spec = sfft.fft(data[idx], axis=1, workers=w).astype(np.complex64)
             out = np.empty((idx.size, rr.size, nl), np.float32)
 
@@ -179,6 +185,13 @@ class MatchedFilter(Stage):
                         pose=b.pose, beams=cones, index=b.index,
                         meta=self._meta(b, wf, rr, lag0=0, beam_index=idx, cones=cones,
                                         last=idx[-1] == nb - 1, cells=out.size))
+            del out, spec, one  # this block's memory goes before the next one is made
+
+    def _per_block(self, beam_bytes: int, workers: int) -> int:
+        """Beams per output block: ``chunk``, fewer when that many beam planes of
+        ``beam_bytes`` would exceed ``block_mb`` (never fewer than the worker threads)."""
+        fit = int(self.block_mb * 1e6 // max(beam_bytes, 1))
+        return max(1, min(self.chunk, max(fit, workers)))
 
     def _write_rd(self, b: Block, rr: np.ndarray, out: np.ndarray, idx: np.ndarray,
                   cones: np.ndarray, lag0: int) -> None:

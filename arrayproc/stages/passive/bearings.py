@@ -14,6 +14,22 @@ Per integrated snapshot:
   ``line_dynamic_db`` below the strongest one (the sidelobes of a line source: −13.3 dB for
   an unshaded line array).
 
+Peaks are separated by ``min_separation`` deg and, with ``peak_widths`` > 0, by that many
+half-power widths of the stronger peak measured on the row itself, so the separation follows
+the beam actually produced (the narrow peaks of ``mvdr`` and ``music``, the wide ones of
+``cbf``); for adaptive beams use ``min_separation = 0`` and ``peak_widths = 1`` (a warning
+says when a fixed separation exceeds twice the measured width of the strongest peak, which can
+hide resolved sources). The thresholds are relative to the median over beams, so they hold for
+any beam pattern (for ``music`` the levels are pseudo-spectrum values, not sound levels).
+
+Relative-bearing beams from ``lr_cbf`` (beam mode ``"lr"``, axis (−180°, 180°], port
+negative): a peak at relative bearing β whose level stands ``lr_rejection_db`` or more above
+the level at −β (its mirror) is resolved: ``bearing_port_deg`` and ``bearing_stbd_deg`` both
+hold the one true bearing heading + β (so the trackers' left-right hypotheses coincide and no
+mirror track forms), ``side`` is +1 (starboard) or −1 (port); below that rejection the row
+keeps the ambiguous pair heading ∓ |β| with ``side`` 0. ``cone_deg`` is |β| and
+``rel_bearing_deg`` is β (both columns optional in the schema, written for these beams only).
+
 Peaks are refined to sub-beam resolution by a parabola through the peak beam and its two
 neighbours (dB against cone angle). Rows (products ``bearings``, DESIGN section 4): ``time``
 (s), ``cone_deg``, ``bearing_port_deg = heading − cone`` and ``bearing_stbd_deg = heading +
@@ -27,6 +43,7 @@ square for broadband peaks, the tone's mean square for lines; dB re ``ref``², s
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterator
 
 import numpy as np
@@ -35,7 +52,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
-from arrayproc.dsp.peaks import pick_peaks
+from arrayproc.dsp.peaks import half_power_width, pick_peaks
 from arrayproc.dsp.tpsw import tpsw
 from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
@@ -84,6 +101,12 @@ class Bearings(Stage):
                                  check=positive),
         "min_separation": Param("float", 4.0, "minimum separation of peaks, deg",
                                 check=lambda v: None if v >= 0 else "must be >= 0"),
+        "peak_widths": Param("float", 0.0, "minimum separation in half-power widths of the "
+                             "stronger peak, measured on the row (0: off)",
+                             check=lambda v: None if v >= 0 else "must be >= 0"),
+        "lr_rejection_db": Param("float", 10.0, "relative-bearing beams: a peak this far above "
+                                 "its mirror beam is taken as resolved to its side, dB",
+                                 check=positive),
         "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
         "max_lines": Param("int", 16, "lines per snapshot", check=positive),
         "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
@@ -92,6 +115,41 @@ class Bearings(Stage):
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
                      "1 µPa for data in Pa, full scale for data in FS)", check=positive),
     }
+
+    _lr = False
+    _warned = False
+    _columns = COLUMNS
+
+    def _lr_row(self, rows: dict[str, list], rel: float, lev: float, heading: float,
+                level_db: np.ndarray, axis: np.ndarray) -> None:
+        """Columns of a peak on relative-bearing beams: resolved to its side when it stands
+        ``lr_rejection_db`` over the level at its mirror bearing −β (interpolated)."""
+        mirror = float(np.interp(-rel, axis, level_db))
+        rows["cone_deg"].append(abs(rel))
+        rows["rel_bearing_deg"].append(rel)
+        if lev - mirror >= self.lr_rejection_db:
+            brg = (heading + rel) % 360.0
+            rows["bearing_port_deg"].append(brg)
+            rows["bearing_stbd_deg"].append(brg)
+            rows["side"].append(1.0 if rel > 0 else -1.0)
+        else:
+            rows["bearing_port_deg"].append((heading - abs(rel)) % 360.0)
+            rows["bearing_stbd_deg"].append((heading + abs(rel)) % 360.0)
+            rows["side"].append(0.0)
+
+    def _check_separation(self, level_db: np.ndarray, axis: np.ndarray, peaks: list) -> None:
+        """Warn once when the fixed ``min_separation`` exceeds twice the half-power width of
+        the strongest peak measured on the row (resolved sources may be hidden)."""
+        if self._warned or not peaks or self.min_separation <= 0:
+            return
+        width = half_power_width(level_db, axis, peaks[0][2])
+        if self.min_separation > 2.0 * width:
+            self._warned = True
+            warnings.warn(f"stage {self.name!r}: key 'min_separation' ({self.min_separation:g}"
+                          f" deg) exceeds twice the measured half-power width of the peaks "
+                          f"({width:.2f} deg): sources closer than that are merged; for "
+                          "adaptive beams set min_separation = 0 and peak_widths = 1",
+                          stacklevel=2)
 
     def validate(self) -> None:
         if not (self.broadband or self.lines):
@@ -106,12 +164,17 @@ class Bearings(Stage):
               dynamic_db: float = np.inf, offset_db: float = np.nan) -> None:
         noise_db = float(np.median(level_db))
         floor = max(noise_db + thr_db, float(level_db.max()) - dynamic_db)
-        for pos, lev, _ in pick_peaks(level_db, cone, floor, self.min_separation,
-                                      self.max_peaks):
+        peaks = pick_peaks(level_db, cone, floor, self.min_separation, self.max_peaks,
+                           self.peak_widths)
+        self._check_separation(level_db, cone, peaks)
+        for pos, lev, _ in peaks:
             rows["time"].append(t)
-            rows["cone_deg"].append(pos)
-            rows["bearing_port_deg"].append((heading - pos) % 360.0)
-            rows["bearing_stbd_deg"].append((heading + pos) % 360.0)
+            if self._lr:
+                self._lr_row(rows, pos, lev, heading, level_db, cone)
+            else:
+                rows["cone_deg"].append(pos)
+                rows["bearing_port_deg"].append((heading - pos) % 360.0)
+                rows["bearing_stbd_deg"].append((heading + pos) % 360.0)
             rows["level_db"].append(lev)
             rows["snr_db"].append(lev - noise_db)
             rows["freq_lo"].append(f_lo)
@@ -126,14 +189,16 @@ class Bearings(Stage):
             cone = np.asarray(b.beams, float)
             if cone.ndim != 1:
                 raise ConfigError(f"stage {self.name!r}: needs cone-angle beams "
-                                  "(beams = {start, stop, count})")
+                                  "(beams = {start, stop, count}) or relative bearings")
             if idx is None:
                 idx = band_bins(b.freqs, self.band, f"stage {self.name!r}")
                 out = self.products("bearings")
+                self._lr = getattr(b.meta, "beam_mode", "cone") == "lr"
+                self._columns = COLUMNS + (("rel_bearing_deg", "side") if self._lr else ())
             times = snapshot_times(b)
             heads = np.asarray(b.meta.headings, float)
             df = float(b.meta.df)
-            rows: dict[str, list] = {k: [] for k in COLUMNS}
+            rows: dict[str, list] = {k: [] for k in self._columns}
             lref = 10 * np.log10(reference_amplitude(recording_units(self.ctx.recording),
                                                      self.ref)**2)
             off_bb = received_level_offset_db(b, broadband=True)

@@ -7,8 +7,9 @@ differential-evolution population (``vectorized=True``) or a grid. ``tests/track
 with them to rounding.
 
 Written by hand (no maintained library does it): :func:`atan2` is a branch-free arc tangent
-(octant reduction, then the tangent-addition reduction to ``|u| ≤ tan(π/12)`` and the Taylor
-series of ``atan`` to order 27, whose alternating remainder is below 1e-17). numba lowers
+(octant reduction, then the tangent-addition reduction to ``|u| ≤ tan(π/12)`` and a
+near-minimax polynomial of degree 17 in u: 9 coefficients where the Taylor series of the
+same accuracy needs 14). numba lowers
 ``np.arctan2`` to a scalar libm call (36 ns per call measured on this machine, 2026-12-01);
 this version is plain arithmetic that LLVM can vectorise, and agrees with ``np.arctan2`` to a
 few ulp (tested). The exponential (Ornstein-Uhlenbeck) correlation of the compact-array
@@ -47,22 +48,18 @@ def atan2(y: float, x: float) -> float:
     u = num / den if den > 0.0 else 0.0
     base = _SIXTH_PI if big else 0.0
     z = u * u
-    # atan(u) = u Σ (−1)^k z^k / (2k+1), k = 0..13 (Horner)
-    p = -1.0 / 27.0
-    p = p * z + 1.0 / 25.0
-    p = p * z - 1.0 / 23.0
-    p = p * z + 1.0 / 21.0
-    p = p * z - 1.0 / 19.0
-    p = p * z + 1.0 / 17.0
-    p = p * z - 1.0 / 15.0
-    p = p * z + 1.0 / 13.0
-    p = p * z - 1.0 / 11.0
-    p = p * z + 1.0 / 9.0
-    p = p * z - 1.0 / 7.0
-    p = p * z + 1.0 / 5.0
-    p = p * z - 1.0 / 3.0
-    p = p * z + 1.0
-    a = base + u * p
+    # atan(u) = u + u z h(z), h the near-minimax polynomial of degree 7 in z = u² on
+    # [0, tan²(π/12)] (Chebyshev interpolation in extended precision; relative error of
+    # atan below 2.7e-16, i.e. under one ulp, measured on 2e5 points)
+    p = 0.045798311833685705
+    p = p * z - 0.06522374321053691
+    p = p * z + 0.07683767862541686
+    p = p * z - 0.09090626202302309
+    p = p * z + 0.11111105996992846
+    p = p * z - 0.14285714240198755
+    p = p * z + 0.19999999999845575
+    p = p * z - 0.3333333333333325
+    a = base + (u + u * z * p)
     a = _HALF_PI - a if ay > ax else a
     a = _PI - a if x < 0.0 else a
     return -a if y < 0.0 else a

@@ -1,0 +1,163 @@
+"""``process --follow``: a recorder process appends to a recording in HDF5 SWMR mode while the
+chain follows it; the live products equal, dataset for dataset and bit for bit, those of a run
+on the finished file; the stream ends after ``--idle`` seconds without samples or at a
+signal, with a complete file that could be read while it grew."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from arrayproc.app.commands import latency_line, process
+from arrayproc.chain.reader import count_blocks
+from arrayproc.io.recording import Recording
+from tests.conftest import REPO, cbf_stage, chain_toml
+
+WRITER = Path(__file__).with_name("live_writer.py")
+ENV = dict(os.environ, PYTHONPATH=str(REPO))
+BLOCK = 512
+
+
+def _chain(tmp_path: Path) -> Path:
+    c = tmp_path / "chain.toml"
+    c.write_text(chain_toml(cbf_stage(256, [80.0, 200.0], 19, batch=2), {"type": "integrate",
+                            "snapshots": 2, "mode": "sliding"},
+                            {"type": "btr", "band": [110.0, 130.0]},
+                            {"type": "lofar", "input": "integrate", "beams": [60.0]},
+                            block=BLOCK))
+    return c
+
+
+def _writer(tmp_path: Path, seconds: float, hold: float = 0.0) -> tuple[subprocess.Popen, Path]:
+    """The recorder, at twice real time once the follower's first rows are on disk."""
+    rec, log = tmp_path / "rec.h5", tmp_path / "writer.json"
+    w = subprocess.Popen([sys.executable, str(WRITER), str(rec), str(log), str(seconds), "0.2",
+                          "0.1", str(hold), str(tmp_path / "live.h5")], stdout=subprocess.PIPE,
+                         text=True, env=ENV, cwd=REPO)
+    assert w.stdout.readline().strip() == "ready"
+    return w, rec
+
+
+def _same_products(a: Path, b: Path) -> int:
+    """Every group, dataset (bit for bit, NaNs equal) and attribute of a in b and back;
+    returns the number of datasets compared."""
+    n = 0
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        assert dict(fa.attrs) == dict(fb.attrs)
+        names_a, names_b = [], []
+        fa.visit(names_a.append)
+        fb.visit(names_b.append)
+        assert sorted(names_a) == sorted(names_b)
+        for k in names_a:
+            oa, ob = fa[k], fb[k]
+            assert {x: np.asarray(v).tolist() for x, v in oa.attrs.items()} == \
+                {x: np.asarray(v).tolist() for x, v in ob.attrs.items()}, k
+            if isinstance(oa, h5py.Dataset):
+                x, y = oa[()], ob[()]
+                assert x.dtype == y.dtype and x.shape == y.shape, k
+                if x.dtype.kind == "f":
+                    assert np.array_equal(x, y, equal_nan=True), k
+                else:
+                    assert np.array_equal(x, y), k
+                n += 1
+    return n
+
+
+def test_follow_equals_whole_file_run(tmp_path):
+    chain = _chain(tmp_path)
+    w, rec = _writer(tmp_path, 12.0)
+    stats: list = []
+    live = tmp_path / "live.h5"
+    n = process(str(rec), str(chain), str(live), follow=True, idle_s=3.0, stats=stats)
+    assert w.wait(60) == 0
+    whole = tmp_path / "whole.h5"
+    n_whole = process(str(rec), str(chain), str(whole))
+    with Recording(rec) as r:
+        assert n == n_whole == count_blocks(r, BLOCK, BLOCK) == r.n_samples // BLOCK + 1
+    assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
+    st = stats[0]
+    assert st.reason.startswith("no new samples")
+    lat = st.latencies()
+    assert lat.size == n and np.all(lat >= 0)
+    # the blocks went through while the recorder was writing, not all at its end
+    written = json.loads((tmp_path / "writer.json").read_text())
+    t_end = written[-1][1]
+    assert np.sum(np.asarray(st.done) < t_end) >= n // 2
+    assert "median" in latency_line(st)
+
+
+def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
+    chain = _chain(tmp_path)
+    w, rec = _writer(tmp_path, 8.0, hold=6.0)   # the recorder goes quiet but keeps the file
+    live = tmp_path / "live.h5"
+    f = subprocess.Popen([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
+                          str(chain), "-o", str(live), "--follow", "--idle", "120"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
+                         cwd=REPO)
+    grown = []
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline:    # rows readable while the file grows (SWMR)
+        time.sleep(0.2)
+        try:
+            with h5py.File(live, "r", libver="latest", swmr=True) as g:
+                if "btr" in g and "time" in g["btr"]:
+                    grown.append(int(g["btr/time"].shape[0]))
+            with h5py.File(rec, "r", libver="latest", swmr=True) as r:
+                if r["time_data"].shape[0] == 8000:
+                    break
+        except OSError:
+            continue
+    assert len(grown) >= 3 and 0 < grown[0] < grown[-1]   # seen growing
+    f.send_signal(signal.SIGINT)
+    out, err = f.communicate(timeout=120)
+    assert f.returncode == 0, err
+    assert "followed until signal 2" in out
+    assert w.wait(60) == 0
+    with h5py.File(live, "r") as g:
+        assert bool(g.attrs["complete"])
+    whole = tmp_path / "whole.h5"
+    process(str(rec), str(chain), str(whole))
+    assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
+
+
+@pytest.mark.parametrize("idle", ["0", "-1", "nan"])
+def test_follow_refuses_bad_idle(tmp_path, idle):
+    chain = _chain(tmp_path)
+    rec = tmp_path / "r.h5"
+    from tests.conftest import write_recording
+    write_recording(rec, np.zeros((2000, 8), np.float32))
+    p = subprocess.run([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
+                        str(chain), "-o", str(tmp_path / "o.h5"), "--follow", "--idle", idle],
+                       capture_output=True, text=True, env=ENV, cwd=REPO)
+    assert p.returncode == 2 and p.stderr.startswith("arrayproc: error: --idle")
+    assert not (tmp_path / "o.h5").exists()
+
+
+def test_signal_handler_in_a_live_run_ends_the_stream_then_stops():
+    """The first signal of a --follow run is only recorded (the stream ends, the writers go
+    on); a second one raises, and the run stops without output."""
+    from arrayproc.app.cli import _on_signal
+    from arrayproc.errors import Interrupted
+    from arrayproc.io.atomic import check_stop, clear_stop, graceful, set_graceful
+    clear_stop()
+    set_graceful(True)
+    try:
+        assert _on_signal(signal.SIGINT, None) is None
+        check_stop()              # no raise: the live products can still be finished
+        with pytest.raises(Interrupted):
+            _on_signal(signal.SIGTERM, None)
+        assert not graceful()
+        with pytest.raises(Interrupted):
+            check_stop()
+    finally:
+        set_graceful(False)
+        clear_stop()
