@@ -120,6 +120,8 @@ def markdown() -> str:
             lines.append(f"### `{name}`")
             lines.append("")
             head = f"*{_kind(obj)}*"
+            if isinstance(obj, (bool, int, float, str)):
+                head += f" `{name} = {obj!r}`"
             if sig:
                 head += f" `{name}{sig}`"
             if where and where != pkg:
