@@ -1,13 +1,17 @@
 """One validator for every TOML the user writes: chains, scenarios, trackers, TMA and batch
-configurations. A :class:`Param` declares a key (kind, default, check); every error names the
+configurations. A :class:`Param` declares a key (kind, default, unit, doc, check) once; a
+:class:`Schema` is the declared keys of one table, which checks a mapping (never a path: each
+file is parsed once, by :func:`read_toml`) and renders the same declarations as a call
+signature, a numpydoc ``Parameters`` section and a Markdown key table. Every error names the
 file, the table and the key, in one line.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +33,8 @@ class Param:
 
     ``kind`` is one of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"band"`` (two floats,
     lo < hi), ``"floats"`` (list of numbers), ``"table"`` (a TOML table), ``"any"``.
-    ``choices`` restricts strings; ``check`` returns an error text or None.
+    ``choices`` restricts strings; ``check`` returns an error text or None; ``unit`` is the SI
+    unit (or ``"deg"``, ``"dB"``, ``"samples"``...) of the value, for the generated docs.
     """
 
     kind: str
@@ -37,20 +42,22 @@ class Param:
     doc: str = ""
     choices: tuple[Any, ...] | None = None
     check: Callable[[Any], str | None] | None = None
+    unit: str = ""
 
     @property
     def required(self) -> bool:
         return self.default is _REQUIRED
 
-    def convert(self, where: str, value: Any) -> Any:
+    def convert(self, where: str, value: Any, sep: str = ": ") -> Any:
+        """The value checked and converted; a ConfigError ``where + sep + what is wrong``."""
         k = self.kind
-        bad = ConfigError(f"{where}: expected {k}, got {value!r}")
+        bad = ConfigError(f"{where}{sep}expected {k}, got {value!r}")
         if k == "float":
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise bad
             value = float(value)
             if not np.isfinite(value):
-                raise ConfigError(f"{where}: must be finite, got {value!r}")
+                raise ConfigError(f"{where}{sep}must be finite, got {value!r}")
         elif k == "int":
             if isinstance(value, bool) or not isinstance(value, int):
                 raise bad
@@ -66,19 +73,192 @@ class Param:
                 raise bad
             value = [float(v) for v in value]
             if k == "band" and (len(value) != 2 or not value[0] < value[1]):
-                raise ConfigError(f"{where}: expected [lo, hi] with lo < hi, got {value!r}")
+                raise ConfigError(f"{where}{sep}expected [lo, hi] with lo < hi, got {value!r}")
         elif k == "table":
             if not isinstance(value, Mapping):
                 raise bad
             value = dict(value)
         if self.choices is not None and value not in self.choices:
-            raise ConfigError(f"{where}: must be one of {', '.join(map(str, self.choices))}, "
+            raise ConfigError(f"{where}{sep}must be one of {', '.join(map(str, self.choices))}, "
                               f"got {value!r}")
         if self.check is not None:
             msg = self.check(value)
             if msg:
-                raise ConfigError(f"{where}: {msg}")
+                raise ConfigError(f"{where}{sep}{msg}")
         return value
+
+
+    @property
+    def type_text(self) -> str:
+        """The kind as the docs write it (``float``, ``[lo, hi]``, ``"a" | "b"``...)."""
+        if self.choices is not None and self.kind == "str":
+            return " \\| ".join(f'"{c}"' for c in self.choices)
+        return {"band": "[lo, hi]", "floats": "list of float"}.get(self.kind, self.kind)
+
+    @property
+    def default_text(self) -> str:
+        """The default as TOML would write it; ``required`` or ``—`` (none: derived)."""
+        if self.required:
+            return "required"
+        return "—" if self.default is None else toml_value(self.default)
+
+
+def toml_value(v: Any) -> str:
+    """A value as it is written in a TOML file (for the generated docs and messages)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return f'"{v}"'
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e15:
+        return f"{v:.1f}"
+    if isinstance(v, Mapping):
+        return "{" + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + "}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    return repr(v)
+
+
+class Schema(Mapping):
+    """The declared keys of one TOML table (a chain stage, ``[tracker]``, ``[tma]``...).
+
+    A read-only mapping name -> :class:`Param`. :meth:`check` validates a mapping of values;
+    :meth:`signature`, :meth:`numpydoc` and :meth:`markdown` render the same declarations.
+
+    Parameters
+    ----------
+    params : mapping of str to Param
+        The keys, in documentation order.
+    summary : str
+        One line saying what the table configures.
+    """
+
+    def __init__(self, params: Mapping[str, Param], summary: str = "") -> None:
+        self.params = dict(params)
+        self.summary = summary
+
+    def __getitem__(self, key: str) -> Param:
+        return self.params[key]
+
+    def __iter__(self):
+        return iter(self.params)
+
+    def __len__(self) -> int:
+        return len(self.params)
+
+    def __or__(self, other: Mapping[str, Param]) -> Schema:
+        return Schema({**self.params, **other}, self.summary)
+
+    def check(self, values: Mapping[str, Any], where: str, *, prefix: str = "",
+              of: str = "", allow: Iterable[str] = ()) -> dict[str, Any]:
+        """Every declared key's value, converted and checked, defaults filled in.
+
+        Parameters
+        ----------
+        values : mapping
+            The table as parsed (or keyword arguments).
+        where : str
+            Start of every message: the file and table, or the stage (``"stage 'cbf'"``).
+        prefix : str
+            The table's dotted path, written before each key in messages: with a prefix
+            (``"tma."``) a message reads ``"{where}: tma.window must be >= 0, got -1.0"``,
+            without one ``"{where}: key 'window': must be >= 0, got -1.0"``.
+        of : str
+            Added after an unknown key's name (``" for type 'cbf'"``).
+        allow : iterable of str
+            Keys of ``values`` that are not declared but are read elsewhere.
+
+        Returns
+        -------
+        dict
+            Key -> value for every declared key. A value of None given for a key whose
+            default is None counts as absent.
+
+        Raises
+        ------
+        ConfigError
+            Unknown key (with the known ones), missing required key, bad value.
+        """
+        if not isinstance(values, Mapping):
+            raise ConfigError(f"{where}: must be a table, got {values!r}")
+        allowed = set(allow)
+
+        def name(key: str) -> str:
+            return prefix + key if prefix else repr(key)
+
+        for key in values:
+            if key not in self.params and key not in allowed:
+                raise ConfigError(f"{where}: unknown key {name(key)}{of} "
+                                  f"(known: {', '.join(sorted(self.params)) or 'none'})")
+        out: dict[str, Any] = {}
+        for key, p in self.params.items():
+            v = values.get(key)
+            if key in values and (v is not None or p.default is not None):
+                out[key] = p.convert(f"{where}: {prefix}{key}" if prefix else
+                                     f"{where}: key {key!r}", v, sep=" " if prefix else ": ")
+            elif p.required:
+                raise ConfigError(f"{where}: missing required key {name(key)}")
+            else:
+                out[key] = p.default
+        return out
+
+    def apply(self, obj: Any, values: Mapping[str, Any], where: str, **kw: Any) -> None:
+        """:meth:`check` the values and set each as an attribute of ``obj``."""
+        for key, v in self.check(values, where, **kw).items():
+            setattr(obj, key, v)
+
+    def signature(self, first: Iterable[inspect.Parameter] = ()) -> inspect.Signature:
+        """A call signature with one keyword-only parameter per key (after ``first``)."""
+        ps = list(first)
+        for key, p in self.params.items():
+            default = inspect.Parameter.empty if p.required else p.default
+            ps.append(inspect.Parameter(key, inspect.Parameter.KEYWORD_ONLY, default=default,
+                                        annotation=_ANNOTATIONS.get(p.kind, Any)))
+        return inspect.Signature(ps)
+
+    def numpydoc(self, indent: str = "") -> str:
+        """A numpydoc ``Parameters`` section: each key with type, default, unit and doc."""
+        lines = ["Parameters", "----------"]
+        for key, p in self.params.items():
+            typ = p.type_text.replace("\\|", "|")
+            dflt = ("required" if p.required else "optional" if p.default is None
+                    else f"default {p.default_text}")
+            unit = f", {p.unit}" if p.unit else ""
+            lines.append(f"{key} : {typ}, {dflt}{unit}")
+            lines.append(f"    {p.doc or '(undocumented)'}")
+        return "\n".join(indent + ln if ln else ln for ln in lines)
+
+    def markdown(self, first: str | None = None) -> str:
+        """A Markdown table of the keys: key, type, default, unit, description.
+
+        ``first`` (e.g. a stage type) adds a first column, filled on the first row only, so
+        several schemas stack into one table (see :func:`markdown_header`).
+        """
+        rows = []
+        for i, (key, p) in enumerate(self.params.items()):
+            cells = [f"`{key}`", p.type_text, p.default_text.replace("|", "\\|"),
+                     p.unit or "—", _md(p.doc)]
+            if first is not None:
+                cells.insert(0, f"`{first}`" if i == 0 else "")
+            rows.append("| " + " | ".join(cells) + " |")
+        if first is None:
+            rows = markdown_header(False) + rows
+        return "\n".join(rows)
+
+
+def markdown_header(first: bool, first_name: str = "type") -> list[str]:
+    """Header lines of a :meth:`Schema.markdown` table."""
+    cols = ["key", "type", "default", "unit", "description"]
+    if first:
+        cols.insert(0, first_name)
+    return ["| " + " | ".join(cols) + " |", "|" + " --- |" * len(cols)]
+
+
+def _md(text: str) -> str:
+    return " ".join(text.split()).replace("|", "\\|")
+
+
+_ANNOTATIONS: dict[str, Any] = {"float": float, "int": int, "bool": bool, "str": str,
+                                "band": list[float], "floats": list[float], "table": dict}
 
 
 def positive(v: Any) -> str | None:
@@ -117,9 +297,30 @@ def read_toml(path: str | os.PathLike, what: str) -> tuple[dict[str, Any], str]:
         raise ConfigError(f"{path}: cannot read {what} file ({e.strerror})") from None
     try:
         text = raw.decode()
-        return tomllib.loads(text), text
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+    except UnicodeDecodeError as e:
         raise ConfigError(f"{path}: invalid TOML ({e})") from None
+    return parse_toml(text, str(path)), text
+
+
+def parse_toml(text: str, where: str) -> dict[str, Any]:
+    """Parse TOML text (the one parse site of the package: every file goes through here once).
+
+    Parameters
+    ----------
+    text : str
+        The document.
+    where : str
+        The file (or ``"chain"`` for text given in Python), for the message.
+
+    Raises
+    ------
+    ConfigError
+        ``"{where}: invalid TOML (...)"``.
+    """
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"{where}: invalid TOML ({e})") from None
 
 
 class Table:

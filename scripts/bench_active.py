@@ -174,9 +174,10 @@ def main() -> None:
 
     steps = instrument() if args.steps else None
     rss0 = rss_mb()
-    cpu0, t0 = time.process_time(), time.perf_counter()
+    cpu0, t0, main0 = time.process_time(), time.perf_counter(), time.thread_time()
     out = list(cfar(mf(beams(read_blocks(rec, 8192)))))
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    main = time.thread_time() - main0  # the calling thread alone: the ping's serial part
     rss1 = rss_mb()
     con = out[0].meta.extra["contacts"]
     cells = int(out[0].meta.extra["cells"])
@@ -184,7 +185,8 @@ def main() -> None:
     cube_gb = cells * 4 / 1e9
     best = int(np.argmax(con["snr_db"])) if con["snr_db"].size else None
     res = {"hydrophones": args.hydrophones, "beams": args.beams, "range_rates": n_rr,
-           "cells": cells, "wall_s": wall, "cpu_s": cpu, "threads": args.threads,
+           "cells": cells, "wall_s": wall, "cpu_s": cpu, "main_thread_cpu_s": main,
+           "threads": args.threads,
            "ping_interval_s": 30.0, "peak_rss_mb": rss1, "rss_before_mb": rss0,
            "cube_float32_gb": cube_gb, "contacts": int(con["time"].size),
            "loadavg": os.getloadavg()}
@@ -199,6 +201,10 @@ def main() -> None:
           f"{cells / 1e6:.0f}e6 cells: {wall:.1f} s wall, {cpu:.1f} s CPU "
           f"(ping interval 30 s); peak RSS {rss1:.0f} MB (cube alone {cube_gb:.2f} GB float32)")
     print(f"contacts {res['contacts']}; strongest {res.get('strongest')}")
+    est = main + (cpu - main) / args.threads
+    print(f"calling thread {main:.1f} s CPU, the other threads {cpu - main:.1f} s: on "
+          f"{args.threads} free cores about {est:.1f} s per ping (serial part + the rest "
+          "shared evenly; an estimate, not a measurement)")
     if steps is not None:
         res["steps"] = {k: {"cpu_s": v[0], "wall_sum_s": v[1], "calls": v[2],
                             "share": v[0] / cpu} for k, v in steps.items()}

@@ -30,41 +30,30 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from arrayproc.chain.block import Block
-from arrayproc.chain.domains import Domain, TimeMeta
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_cbf  # noqa: E402  (same folder: its noise blocks)
+
 from arrayproc.dsp.windows import time_taper
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.mvdr import MVDR
 
-FS = 5120.0
-N_CH = 64
-NFFT = 2048
-HOP = 1024
-BAND = (100.0, 2000.0)
-BEAMS = {"start": 0.0, "stop": 180.0, "count": 181}
-BLOCK = 8192
-C = 1500.0
+# the CBF benchmark's configuration (issue 4): same data, same beams
+FS, N_CH, NFFT, HOP = bench_cbf.FS, bench_cbf.N_CH, bench_cbf.NFFT, bench_cbf.HOP
+BAND, BEAMS, C = bench_cbf.BAND, bench_cbf.BEAMS, bench_cbf.C
 LOADING = 0.01
-
-_POOL = [np.random.default_rng(k).standard_normal((BLOCK, N_CH)).astype(np.float32)
-         for k in range(4)]
 
 
 def source(seconds: float, positions: np.ndarray):
-    """Time blocks of white noise, cycling over a few pre-drawn blocks (bounded memory)."""
-    n = int(seconds * FS)
-    i = 0
-    k = 0
-    while i < n:
-        m = min(BLOCK, n - i)
-        yield Block(_POOL[k % 4][:m], Domain.TIME, i / FS, m / FS, FS, positions, None,
-                    meta=TimeMeta(i, m))
-        i += m
-        k += 1
+    """The CBF benchmark's white-noise time blocks (scripts/bench_cbf.py) at ``positions``."""
+    for b in bench_cbf.source(seconds):
+        yield b.replace(positions=positions)
 
 
 def run_stage(seconds: float, positions: np.ndarray, snapshots: int) -> tuple[list, float,

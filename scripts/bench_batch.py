@@ -122,39 +122,10 @@ def stats(xs: list[float]) -> dict:
     return {"min_s": min(xs), "median_s": statistics.median(xs), "runs_s": xs}
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dir", default="/tmp/bench_batch")
-    ap.add_argument("--seconds", type=float, default=60.0)
-    ap.add_argument("--channels", type=int, default=64)
-    ap.add_argument("--recordings", type=int, default=4)
-    ap.add_argument("--chain", default="towed_passive")
-    ap.add_argument("--repeats", type=int, default=2)
-    ap.add_argument("--mc-runs", type=int, default=500)
-    ap.add_argument("--mc-filters", default="ekf,ukf,ckf,ghf")
-    ap.add_argument("--no-mc", action="store_true")
-    ap.add_argument("--no-dask-defaults", action="store_true",
-                    help="skip the 1-worker batch with Dask's default worker settings")
-    ap.add_argument("--json", default=None)
-    a = ap.parse_args(argv)
-    d = Path(a.dir)
-    d.mkdir(parents=True, exist_ok=True)
-    chain = DATA / "chains" / f"{a.chain}.toml"
-    cores = os.cpu_count() or 1
-    out: dict = {"cores": cores, "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
-    print(f"simulating {a.recordings} x {a.seconds:g} s, {a.channels} channels ({load()})",
-          flush=True)
-    recs = simulate(d, a.recordings, a.seconds, a.channels)
-
-    direct(recs[:1], chain, d / "warm")
-    exe = str(Path(sys.executable).with_name("arrayproc"))
-    t0 = time.perf_counter()
-    subprocess.run([exe, "process", str(recs[0]), "-c", str(chain), "-o",
-                    str(d / "cli.h5"), "-q", "--no-progress"], check=True)
-    out["cli_one_file_s"] = time.perf_counter() - t0
-    print(f"arrayproc process (CLI, one file, with start-up): {out['cli_one_file_s']:.1f} s "
-          f"({load()})", flush=True)
-
+def bench_batches(a: argparse.Namespace, recs: list[Path], chain: Path, d: Path, cores: int,
+                  out: dict) -> None:
+    """Direct runs and batches on 1 worker x all threads (paired with direct), 1 x 1 and
+    2 x half; with Dask's default worker settings unless ``--no-dask-defaults``."""
     # the last configuration starts its worker with Dask's defaults (MALLOC_TRIM_THRESHOLD_=
     # 65536, 10 ms profiler, 20 ms tick: what the batch did before): their cost, paired with
     # the direct run
@@ -197,6 +168,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"per-task overhead of {key} vs direct, paired: "
                   + ", ".join(f"{q['wall_pct']:+.1f} % wall / {q['cpu_pct']:+.1f} % CPU"
                               for q in pairs), flush=True)
+
+
+def summarise_batches(out: dict, cores: int) -> None:
+    """Speed-ups and per-task overheads from :func:`bench_batches`' timings."""
     b1 = out[f"batch_1w_{cores}t"]
     b2 = out[f"batch_2w_{max(1, cores // 2)}t"]
     b11 = out["batch_1w_1t"]
@@ -222,44 +197,86 @@ def main(argv: list[str] | None = None) -> int:
         print(f"with Dask's default worker settings: task CPU "
               f"{out['dask_defaults_cpu_pct']:+.1f} % vs direct (min vs min)", flush=True)
 
+
+
+def bench_mc(a: argparse.Namespace, cores: int, out: dict) -> None:
+    """The L-R Monte Carlo table on 1 and on 2 workers: time and same numbers."""
+    from arrayproc.evaluate.distributed import lr_table
+    filters = [f for f in a.mc_filters.split(",") if f]
+    tables = {}
+    for n_workers in (1, 2):
+        threads = max(1, cores // n_workers)
+        client, clu = cluster(n_workers, threads)
+        try:
+            client.wait_for_workers(n_workers)
+            lr_table(n_workers * 20, 99, [1, 2], filters, client=client, chunk=20,
+                     threads=threads)  # JIT in every worker
+            t0 = time.perf_counter()
+            tables[n_workers] = lr_table(a.mc_runs, 2024, [1, 2], filters, client=client,
+                                         chunk=50, threads=threads)
+            dt = time.perf_counter() - t0
+        finally:
+            client.close()
+            clu.close()
+        out[f"mc_{n_workers}w_s"] = dt
+        print(f"L-R table, {a.mc_runs} runs x {len(filters)} filters x 2 cases, "
+              f"{n_workers} worker(s) x {threads} thread(s): {dt:.1f} s ({load()})",
+              flush=True)
+    same = all(np.array_equal(np.asarray(tables[1][c][f][k]), np.asarray(tables[2][c][f][k]),
+                              equal_nan=True)
+               for c in tables[1] for f in tables[1][c] for k in tables[1][c][f]
+               if not k.startswith("seconds"))
+    out["mc_speedup"] = out["mc_1w_s"] / out["mc_2w_s"]
+    out["mc_same_numbers"] = same
+    print(f"L-R table speed-up 2 vs 1 worker: {out['mc_speedup']:.2f}x; same numbers: {same}")
+    print(f"{'case':<5}{'filter':<7}{'loss% known':>12}{'loss% res.':>11}"
+          f"{'RMSE pos m':>11}{'true side%':>11}")
+    for c, rows in tables[2].items():
+        for f, r in rows.items():
+            print(f"{'I' * c:<5}{f.upper():<7}{r['track_loss_pct_known_side']:>12.2f}"
+                  f"{r['track_loss_pct_resolved']:>11.2f}{r['rmse_pos_final_m']:>11.0f}"
+                  f"{r['true_side_pct']:>11.2f}")
+    out["mc_table"] = {c: {f: {k: v for k, v in r.items() if not isinstance(v, np.ndarray)}
+                           for f, r in rows.items()} for c, rows in tables[2].items()}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dir", default="/tmp/bench_batch")
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--channels", type=int, default=64)
+    ap.add_argument("--recordings", type=int, default=4)
+    ap.add_argument("--chain", default="towed_passive")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--mc-runs", type=int, default=500)
+    ap.add_argument("--mc-filters", default="ekf,ukf,ckf,ghf")
+    ap.add_argument("--no-mc", action="store_true")
+    ap.add_argument("--no-dask-defaults", action="store_true",
+                    help="skip the 1-worker batch with Dask's default worker settings")
+    ap.add_argument("--json", default=None)
+    a = ap.parse_args(argv)
+    d = Path(a.dir)
+    d.mkdir(parents=True, exist_ok=True)
+    chain = DATA / "chains" / f"{a.chain}.toml"
+    cores = os.cpu_count() or 1
+    out: dict = {"cores": cores, "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
+    print(f"simulating {a.recordings} x {a.seconds:g} s, {a.channels} channels ({load()})",
+          flush=True)
+    recs = simulate(d, a.recordings, a.seconds, a.channels)
+
+    direct(recs[:1], chain, d / "warm")
+    exe = str(Path(sys.executable).with_name("arrayproc"))
+    t0 = time.perf_counter()
+    subprocess.run([exe, "process", str(recs[0]), "-c", str(chain), "-o",
+                    str(d / "cli.h5"), "-q", "--no-progress"], check=True)
+    out["cli_one_file_s"] = time.perf_counter() - t0
+    print(f"arrayproc process (CLI, one file, with start-up): {out['cli_one_file_s']:.1f} s "
+          f"({load()})", flush=True)
+
+    bench_batches(a, recs, chain, d, cores, out)
+    summarise_batches(out, cores)
     if not a.no_mc:
-        from arrayproc.evaluate.distributed import lr_table
-        filters = [f for f in a.mc_filters.split(",") if f]
-        tables = {}
-        for n_workers in (1, 2):
-            threads = max(1, cores // n_workers)
-            client, clu = cluster(n_workers, threads)
-            try:
-                client.wait_for_workers(n_workers)
-                lr_table(n_workers * 20, 99, [1, 2], filters, client=client, chunk=20,
-                         threads=threads)  # JIT in every worker
-                t0 = time.perf_counter()
-                tables[n_workers] = lr_table(a.mc_runs, 2024, [1, 2], filters, client=client,
-                                             chunk=50, threads=threads)
-                dt = time.perf_counter() - t0
-            finally:
-                client.close()
-                clu.close()
-            out[f"mc_{n_workers}w_s"] = dt
-            print(f"L-R table, {a.mc_runs} runs x {len(filters)} filters x 2 cases, "
-                  f"{n_workers} worker(s) x {threads} thread(s): {dt:.1f} s ({load()})",
-                  flush=True)
-        same = all(np.array_equal(np.asarray(tables[1][c][f][k]), np.asarray(tables[2][c][f][k]),
-                                  equal_nan=True)
-                   for c in tables[1] for f in tables[1][c] for k in tables[1][c][f]
-                   if not k.startswith("seconds"))
-        out["mc_speedup"] = out["mc_1w_s"] / out["mc_2w_s"]
-        out["mc_same_numbers"] = same
-        print(f"L-R table speed-up 2 vs 1 worker: {out['mc_speedup']:.2f}x; same numbers: {same}")
-        print(f"{'case':<5}{'filter':<7}{'loss% known':>12}{'loss% res.':>11}"
-              f"{'RMSE pos m':>11}{'true side%':>11}")
-        for c, rows in tables[2].items():
-            for f, r in rows.items():
-                print(f"{'I' * c:<5}{f.upper():<7}{r['track_loss_pct_known_side']:>12.2f}"
-                      f"{r['track_loss_pct_resolved']:>11.2f}{r['rmse_pos_final_m']:>11.0f}"
-                      f"{r['true_side_pct']:>11.2f}")
-        out["mc_table"] = {c: {f: {k: v for k, v in r.items() if not isinstance(v, np.ndarray)}
-                               for f, r in rows.items()} for c, rows in tables[2].items()}
+        bench_mc(a, cores, out)
     if a.json:
         Path(a.json).write_text(json.dumps(out, indent=1, default=float))
     return 0

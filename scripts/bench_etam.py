@@ -27,6 +27,7 @@ from arrayproc.chain.reader import read_blocks
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter
 from arrayproc.io.recording import Recording, RecordingWriter
+from arrayproc.sim.plane_wave import towed_tonal_plane_waves
 from arrayproc.stages.beamform.etam import ETAM, etam_reference
 from arrayproc.stages.beamform.ibf import IBF
 
@@ -57,10 +58,7 @@ def make_recording(path: Path, seconds: float) -> None:
         for s in range(0, n, chunk):
             t = (s + np.arange(min(chunk, n - s))) / FS
             x = rng.standard_normal((t.size, N)) * 0.05
-            for f, cone, a in waves:
-                u = np.cos(np.deg2rad(cone))
-                x += a * np.cos(2 * np.pi * f * (t[:, None] + (U * t[:, None] + pos[None, :, 0])
-                                                 * u / C))
+            x += towed_tonal_plane_waves(t, pos, U, waves, C)
             w.append(x.astype(np.float32))
         tn = np.arange(0.0, seconds + 1.0)
         w.set_nav(tn, np.stack([np.zeros_like(tn), U * tn], -1), np.zeros_like(tn))

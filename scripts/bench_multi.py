@@ -29,6 +29,7 @@ from arrayproc.interop.stonesoup import gnn_tracker, to_ss_bearing
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.tracks import Status
 from arrayproc.track.multi import contacts_manager
+from arrayproc.track.state import Context
 
 SIG = (math.radians(1.0), 15.0, 0.2)  # bearing rad, range m, range rate m/s
 Q = 0.01
@@ -68,7 +69,7 @@ def run_ours(t, scans):
            "contacts": {"sigma_bearing_deg": math.degrees(SIG[0]), "sigma_range_m": SIG[1],
                         "sigma_range_rate_mps": SIG[2], "q": Q, "sigma_speed_mps": 5.0,
                         "mirror": False}}
-    own = np.zeros(4)
+    own = Context(np.zeros(4))
     mgr = contacts_manager(cfg)
     t0 = time.perf_counter()
     for tk, Z in zip(t, scans, strict=True):

@@ -237,10 +237,12 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
                   range_m: float, cone_deg: float, reuse: bool = False,
                   beams: tuple[float, float, int] = (0.0, 180.0, 181),
                   blank: str = "") -> dict:
+    """Simulate (or reuse) the recording, run the chain, score the contacts
+    (:func:`arrayproc.evaluate.scenarios.thesis_active.score_products`) and plot them."""
     from arrayproc.chain import build_chain, run_chain
-    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.evaluate.scenarios.thesis_active import score_products
+    from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import Recording
-    from arrayproc.plots._active import associate, echo_truth
     from arrayproc.stages import load_all
     load_all()
     t0 = time.perf_counter()
@@ -261,151 +263,12 @@ def part_scenario(out: Path, rec_path: Path | None, duration: float | None,
         with Recording(rec_path) as rec, ProductsWriter(prod, source=str(rec_path)) as w:
             run_chain(rec, spec, w)
     t_proc, c_proc = time.perf_counter() - t0, time.process_time() - c0
-    with Recording(rec_path) as rec:
-        tr = echo_truth(rec)
-        act = rec.active()
-        n_el = rec.n_channels
-        n_samples, rec_fs = rec.n_samples, rec.fs
-    g = read_products(prod)
-    full = {k: np.asarray(v) for k, v in g["contacts"].items() if k not in ("attrs", "kind",
-                                                                            "stage")}
-    br = {k: np.asarray(v) for k, v in g["contacts_bracket"].items()
-          if k not in ("attrs", "kind", "stage")} if "contacts_bracket" in g else None
-    wv = np.array([x.decode() for x in full["waveform"]])
-    bpsk_pings = [i for i, n in enumerate(act.waveform) if n == "bpsk"]
-    cell = C / (2 * act.waveforms["bpsk"].bandwidth)
-    noise_db = 55.0
-    T = act.waveforms["bpsk"].duration
-    # end of the direct arrival (s after the ping) at the farthest element, default margin
-    with Recording(rec_path) as rec:
-        pos = rec.positions
-    gate_end = float(np.max(np.linalg.norm(pos - act.projector, axis=1))) / C + T + 0.02
     res = {"recording": str(rec_path), "simulate_s": t_sim, "simulate_cpu_s": c_sim,
            "process_wall_s": t_proc, "process_cpu_s": c_proc, "products": str(prod),
-           "beams": list(beams), "blank_direct": blank_key, "loadavg": os.getloadavg(),
-           "bpsk_pings": len(bpsk_pings),
-           "hfm_pings": len(act.waveform) - len(bpsk_pings), "range_cell_m": cell}
-    rows = []
-    sub = tr["kind"] == "target"
-    for p in bpsk_pings:
-        k = np.flatnonzero(sub & (tr["ping"] == p))
-        if k.size == 0:
-            continue
-        k = int(k[0])
-        if tr["time"][k] + T > n_samples / rec_fs:  # echo not wholly in the recording
-            continue
-        snr_pred = (tr["level_db"][k] - noise_db + 10 * np.log10(T) + 10 * np.log10(n_el)
-                    - 1.76)
-        delay = float(tr["time"][k] - act.time[p])
-        if blank in ("all", "bpsk") or "bpsk" in blank.split(","):
-            # the part of the echo received after the direct-blast gate
-            snr_pred += 10 * np.log10(max(1e-6, min(1.0, (delay - gate_end) / T + 1.0)))
-        m = np.flatnonzero((full["ping"] == p) & (wv == "bpsk")
-                           & (np.abs(full["range_m"] - tr["range_array_m"][k]) < 30.0)
-                           & (np.abs(full["cone_deg"] - tr["cone_deg"][k]) < 10.0))
-        row = {"ping": p, "snr_expected_db": float(snr_pred), "delay_s": delay,
-               "inside_direct_blast": bool(delay < gate_end),
-               "truth_range_m": float(tr["range_array_m"][k]),
-               "truth_range_rate": float(tr["range_rate_mps"][k]),
-               "truth_cone": float(tr["cone_deg"][k]), "detected": bool(m.size)}
-        if m.size:
-            j = m[np.argmax(full["snr_db"][m])]
-            row.update(range_m=float(full["range_m"][j]),
-                       range_err_cells=float((full["range_m"][j] - tr["range_array_m"][k])
-                                             / cell),
-                       range_rate=float(full["range_rate_mps"][j]),
-                       range_rate_err=float(full["range_rate_mps"][j]
-                                            - tr["range_rate_mps"][k]),
-                       cone=float(full["cone_deg"][j]), snr_db=float(full["snr_db"][j]),
-                       abs_doppler=float(full["absolute_doppler_mps"][j]),
-                       moving=bool(full["moving"][j]))
-        if br is not None:
-            mb = np.flatnonzero((br["ping"] == p)
-                                & (np.abs(br["range_m"] - tr["range_array_m"][k]) < 30.0)
-                                & (np.abs(br["cone_deg"] - tr["cone_deg"][k]) < 10.0))
-            row["bracket_detected"] = bool(mb.size)
-            if mb.size:
-                j = mb[np.argmax(br["snr_db"][mb])]
-                row.update(bracket_range_m=float(br["range_m"][j]),
-                           bracket_range_rate=float(br["range_rate_mps"][j]),
-                           bracket_moving=bool(br["moving"][j]))
-            cf = full["cells"][full["ping"] == p]
-            cb = br["cells"][br["ping"] == p]
-            row["cells_full"] = int(cf[0]) if cf.size else None
-            row["cells_bracket"] = int(cb[0]) if cb.size else 0
-        rows.append(row)
-        print(f"  ping {p}: {row}", flush=True)
-    res["submarine"] = rows
-    strong = [r for r in rows if r["snr_expected_db"] > 15.0]
-    det = [r for r in strong if r["detected"]]
-    res["detection_rate"] = len(det) / max(1, len(strong))
-    res["max_abs_range_err_cells"] = max((abs(r["range_err_cells"]) for r in det), default=None)
-    res["max_abs_range_rate_err"] = max((abs(r["range_rate_err"]) for r in det), default=None)
-    res["moving_fraction"] = float(np.mean([r["moving"] for r in det])) if det else None
-    # clutter: loose gates (30 m, 10 deg) let false alarms near a clutter echo in, so also
-    # the contact nearest each clutter echo within two range cells and 3 deg
-    sens = wv == "bpsk"
-    for name, rg, cg in (("loose_30m_10deg", 30.0, 10.0), ("tight_2cells_3deg", 2 * cell, 3.0)):
-        idx = associate(full, tr, range_gate=rg, cone_gate=cg)
-        is_cl = (idx >= 0) & (tr["kind"][np.maximum(idx, 0)] == "clutter") & sens
-        keep = []
-        for e in np.unique(idx[is_cl]):  # one contact per echo: the strongest
-            m = np.flatnonzero(is_cl & (idx == e))
-            keep.append(m[np.argmax(full["snr_db"][m])])
-        keep = np.array(keep, int)
-        res[f"clutter_{name}"] = {
-            "contacts": int(is_cl.sum()),
-            "static_fraction_all": (float(np.mean(~full["moving"][is_cl].astype(bool)))
-                                    if is_cl.any() else None),
-            "echoes_detected": int(keep.size),
-            "static_fraction_per_echo": (float(np.mean(~full["moving"][keep].astype(bool)))
-                                         if keep.size else None),
-            "range_rate_err_median": (float(np.median(full["range_rate_mps"][keep]
-                                                      - tr["range_rate_mps"][idx[keep]]))
-                                      if keep.size else None)}
-        if name.startswith("loose"):
-            res["unassociated_bpsk_contacts"] = int(((idx < 0) & sens).sum())
-    res["clutter_echoes_in_bpsk_pings"] = int(np.sum((tr["kind"] == "clutter")
-                                                     & np.isin(tr["ping"], bpsk_pings)))
-    in_sector = (tr["cone_deg"] >= beams[0]) & (tr["cone_deg"] <= beams[1])
-    res["clutter_echoes_in_bpsk_pings_in_sector"] = int(np.sum(
-        (tr["kind"] == "clutter") & np.isin(tr["ping"], bpsk_pings) & in_sector))
-    # near range: clutter echoes arriving while the direct blast is still received
-    idx = associate(full, tr, range_gate=2 * cell, cone_gate=3.0)
-    delay_all = tr["time"] - act.time[tr["ping"]]
-    for name, lo, hi in (("near_inside_blast", 0.0, gate_end), ("far", gate_end, np.inf)):
-        sel = ((tr["kind"] == "clutter") & np.isin(tr["ping"], bpsk_pings)
-               & (delay_all >= lo) & (delay_all < hi) & in_sector)
-        hit = np.unique(idx[(idx >= 0) & sens])
-        det = np.intersect1d(np.flatnonzero(sel), hit)
-        near_c = sens & (full["range_m"] < C * gate_end / 2)
-        res[f"clutter_{name}"] = {
-            "delay_s": [lo, None if not np.isfinite(hi) else hi],
-            "echoes": int(sel.sum()), "detected_tight": int(det.size),
-            "detected_fraction": float(det.size / max(1, sel.sum()))}
-        if name.startswith("near"):
-            res[f"clutter_{name}"]["bpsk_contacts_nearer_than_gate"] = int(near_c.sum())
-    if br is not None and rows:
-        with_prev = [r for r in rows if any(n == "hfm" for n in act.waveform[:r["ping"]])]
-        cf = sum(r["cells_full"] or 0 for r in with_prev)
-        cb = sum(r["cells_bracket"] for r in with_prev)
-        res["bracket"] = {"range_m": range_m, "cone_deg": cone_deg,
-                          "pings_with_previous_hfm": [r["ping"] for r in with_prev],
-                          "cells_full": cf, "cells_bracket": cb,
-                          "cell_fraction": cb / max(cf, 1),
-                          # the same against the shipped chain's 181-beam fan (equal cells
-                          # per beam; the brackets lie inside the sector)
-                          "cell_fraction_of_181_beams": cb / max(cf * 181 / beams[2], 1),
-                          "same_submarine_contacts": all(
-                              r.get("bracket_detected") == r["detected"]
-                              and abs(r.get("bracket_range_m", np.nan)
-                                      - r.get("range_m", np.nan)) < 0.5
-                              and abs(r.get("bracket_range_rate", np.nan)
-                                      - r.get("range_rate", np.nan)) < 0.05
-                              for r in with_prev if r["detected"] or r.get("bracket_detected")),
-                          "submarine_missed_by_both": [r["ping"] for r in with_prev
-                                                       if not r["detected"]
-                                                       and not r.get("bracket_detected")]}
+           "beams": list(beams), "blank_direct": blank_key, "loadavg": os.getloadavg()}
+    res.update(score_products(rec_path, prod, beams, blank, range_m, cone_deg))
+    for row in res["submarine"]:
+        print(f"  ping {row['ping']}: {row}", flush=True)
     from arrayproc.plots.contacts import plot_contacts
     plot_contacts(str(prod), str(out / f"contacts{sfx}.png"))
     return res

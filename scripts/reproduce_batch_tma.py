@@ -27,78 +27,18 @@ from pathlib import Path
 
 import numpy as np
 
+from arrayproc.evaluate.scenarios.thesis_tma import C, fig_3_19
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.fim import bo_fim, crlb_from_fim, td_fim
-
-SIGMA_TAU = 1e-4                    # s (thesis 3.3.3.1)
-SIGMA_THETA = np.deg2rad(0.0306)    # rad (thesis 3.3.3.1, from app. C.1)
-N_H, DX, C = 128, 0.36, 1500.0
-
-
-def c6_sigma_theta(theta_deg: float = 90.0) -> float:
-    """σ_θ (deg) of thesis eq. (C.6) for the array and σ_τ above, at cone angle θ."""
-    j = (DX * np.sin(np.deg2rad(theta_deg)) / (SIGMA_TAU * C)) ** 2 * N_H * (N_H - 1) \
-        * (2 * N_H - 1) / 6
-    return float(np.rad2deg(1 / np.sqrt(j)))
 
 
 def run(runs: int, seed: int, client=None, chunk: int = 10) -> dict:
-    """Fig. 3.19's Monte Carlo: here, run i seeded as before (one generator for every run's
-    errors, solvers seeded ``seed * 100003 + i``); on a Dask client, chunks of ``chunk`` runs,
-    chunk k drawing from ``SeedSequence(seed).spawn(n_chunks)[k]``
-    (:func:`arrayproc.evaluate.distributed.spread`): the same numbers on any number of
-    workers, not the same as here."""
-    from arrayproc.evaluate.distributed import spread, tma_chunk
-    tr = S.turn_track()
-    el = S.line_elements(tr, N_H, DX)
-    x = S.FIG_3_18_SOURCE
-    crlb_b = crlb_from_fim(bo_fim(x, tr.time, tr.position, SIGMA_THETA))[0]
-    crlb_d = crlb_from_fim(td_fim(x, tr.time, el, 0, C, SIGMA_TAU))[0]
-    scenario = dict(times=tr.time, observer_pos=tr.position, elements_xy=el,
-                    heading_rad=tr.heading, state=x, sigma_theta_rad=SIGMA_THETA,
-                    sigma_tau_s=SIGMA_TAU, sound_speed=C)
-
+    """Fig. 3.19's Monte Carlo (:func:`arrayproc.evaluate.scenarios.thesis_tma.fig_3_19`),
+    logging progress every 10 runs."""
     def log(done: int) -> None:
         if done % 10 == 0:
             print(f"  run {done}/{runs}", file=sys.stderr, flush=True)
 
-    if client is None:
-        parts = [tma_chunk(runs, seed, **scenario, log=log,
-                           seeds=[seed * 100003 + i for i in range(runs)])]
-    else:
-        parts = spread(tma_chunk, runs, seed, client, chunk, **scenario)
-    err = {m: np.concatenate([p[m] for p in parts]) for m in ("bearings", "delays")}
-    t_solve = {m: float(sum(p[f"seconds_{m}"] for p in parts)) for m in ("bearings", "delays")}
-    out: dict = {"runs": runs, "seed": seed,
-                 "seeding": "one generator" if client is None else f"chunks of {chunk}",
-                 "scenario": {
-        "source_state": x.tolist(), "n_hydrophones": N_H, "spacing_m": DX,
-        "sigma_tau_s": SIGMA_TAU, "sigma_theta_deg": float(np.rad2deg(SIGMA_THETA)),
-        "c6_sigma_theta_broadside_deg": c6_sigma_theta(), "snapshots": int(tr.time.size),
-        "ownship": "3 m/s, course 0 deg for 300 s then 315 deg for 300 s",
-        "source": "3 m/s course 0 deg from (2000, 1000) m"}}
-    targets = {"bearings": 0.30, "delays": 0.15}
-    for m, crlb in (("bearings", crlb_b), ("delays", crlb_d)):
-        e = np.array(err[m])
-        std_xy = e[:, :2].std(0, ddof=1)
-        bound_xy = np.sqrt(np.diag(crlb)[:2])
-        pos_std = float(np.sqrt(np.sum(std_xy**2)))
-        pos_bound = float(np.sqrt(np.trace(crlb[:2, :2])))
-        ratio = pos_std / pos_bound
-        out[m] = {"std_x_m": float(std_xy[0]), "std_y_m": float(std_xy[1]),
-                  "crlb_x_m": float(bound_xy[0]), "crlb_y_m": float(bound_xy[1]),
-                  "position_std_m": pos_std, "position_crlb_m": pos_bound,
-                  "ratio": ratio, "bias_x_m": float(e[:, 0].mean()),
-                  "bias_y_m": float(e[:, 1].mean()),
-                  "std_vx_mps": float(e[:, 2].std(ddof=1)),
-                  "std_vy_mps": float(e[:, 3].std(ddof=1)),
-                  "crlb_vx_mps": float(np.sqrt(crlb[2, 2])),
-                  "crlb_vy_mps": float(np.sqrt(crlb[3, 3])),
-                  "target": f"within {targets[m]:.0%} of the CRLB",
-                  "met": bool(abs(ratio - 1) <= targets[m]),
-                  "seconds_per_solution": t_solve[m] / runs,
-                  "errors": e.tolist()}
-    return out
+    return fig_3_19(runs, seed, client, chunk, log)
 
 
 def plot(res: dict, outdir: Path) -> None:

@@ -1,24 +1,9 @@
 #!/usr/bin/env python
 """Compact-array paper Fig. 1 analogue by simulation: RMSE of range and heading at the CPA.
 
-The paper's Fig. 1 comes from 171 real vessels passing a seabed tetrahedral array (1.84 m
-between hydrophones; only azimuths used) with a mean vessel speed of 7.3 m/s. We simulate the
-same estimator (paper eqs. (1)-(5), :mod:`arrayproc.track.batch.compact`): a static array at
-the origin, a vessel at 7.3 m/s on heading 30° whose CPA distance runs from 100 m to 3 km,
-observed for 20 min centred on the CPA with a bearing every 4 s (301 bearings), Gaussian
-bearing errors of σ = 2° (our assumption: the paper gives no σ), either independent or
-exponentially correlated (τ = 30 s). Cases:
-
-- ``diagonal``: independent errors, diagonal C;
-- ``full``: correlated errors, full (exponential) C;
-- ``mismatched``: correlated errors, diagonal C (what ignoring the correlation costs);
-- ``speed_error``: the vessel actually at 6.0 or 9.0 m/s, the estimator assuming 7.3 m/s
-  (independent errors, diagonal C) — the drift of range and heading.
-
-The RMSE of the range (from the array, at the true CPA time) and of the heading are compared
-with the CRLB from the Fisher information with C (speed known); target (issue 15): within
-25 % for ``diagonal`` and ``full``. The speed-error rows also give the bound with a speed
-prior σ_v = 1.5 m/s. Usage:
+Cases ``diagonal``, ``full``, ``mismatched`` and ``speed_error`` at CPA distances 100 m - 3 km
+against the CRLB; the scenario, the estimator settings and the assumptions (σ = 2°, τ = 30 s)
+are described in :mod:`arrayproc.evaluate.scenarios.compact_paper`. Usage:
 
   python scripts/reproduce_compact_tma.py [--runs 50] [--seed 1] [--json OUT] [--plot DIR]
 """
@@ -33,85 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
-from arrayproc.track.batch.compact import compact_bearings, cpa_range_heading, solve_compact
-from arrayproc.track.batch.fim import compact_fim, crlb_from_fim, innovation_coefficients
-
-SPEED = 7.3
-HEADING = np.deg2rad(30.0)
-DURATION = 1200.0
-DT = 4.0
-SIGMA = np.deg2rad(2.0)
-CORR = 30.0
-SIGMA_SPEED = 1.5
-CPAS = (100.0, 300.0, 1000.0, 2000.0, 3000.0)
-
-
-def truth(d_cpa: float, speed: float = SPEED) -> np.ndarray:
-    """(x0, y0, γ): the vessel passes (d cos γ, −d sin γ) at the middle of the window."""
-    pc = d_cpa * np.array([np.cos(HEADING), -np.sin(HEADING)])
-    p0 = pc - speed * DURATION / 2 * np.array([np.sin(HEADING), np.cos(HEADING)])
-    return np.array([p0[0], p0[1], HEADING])
-
-
-def ou_noise(rng: np.random.Generator, t: np.ndarray, corr: float) -> np.ndarray:
-    phi, _ = innovation_coefficients(t, SIGMA, corr)
-    e = np.empty(t.size)
-    e[0] = rng.normal() * SIGMA
-    for b in range(1, t.size):
-        e[b] = phi[b] * e[b - 1] + np.sqrt(1 - phi[b] ** 2) * SIGMA * rng.normal()
-    return e
-
-
-def cpa_bounds(q: np.ndarray, t: np.ndarray, corr: float, sigma_speed: float) -> tuple:
-    """CRLB (m, deg) of the range at the CPA time and of the heading."""
-    f = compact_fim(q, SPEED, t, [0.0, 0.0], SIGMA, corr, sigma_speed)
-    p, _ = crlb_from_fim(f)
-    tc = DURATION / 2
-    g = q[2]
-    pos = q[:2] + SPEED * tc * np.array([np.sin(g), np.cos(g)])
-    u = pos / np.hypot(*pos)
-    grad = np.array([u[0], u[1], u @ (SPEED * tc * np.array([np.cos(g), -np.sin(g)])),
-                     u @ (tc * np.array([np.sin(g), np.cos(g)]))])[:p.shape[0]]
-    return float(np.sqrt(grad @ p @ grad)), float(np.rad2deg(np.sqrt(p[2, 2])))
-
-
-def run_case(d: float, case: str, runs: int, rng: np.random.Generator, n_grid: int,
-             n_headings: int) -> dict:
-    t = np.arange(0.0, DURATION + 1e-9, DT)
-    speeds = (6.0, 9.0) if case == "speed_error" else (SPEED,)
-    corr_true = CORR if case in ("full", "mismatched") else 0.0
-    corr_est = CORR if case == "full" else 0.0
-    out = {}
-    for v in speeds:
-        q = truth(d, v)
-        h = compact_bearings(q, v, t, [0.0, 0.0])
-        r_err, g_err = [], []
-        for _ in range(runs):
-            y = h + ou_noise(rng, t, corr_true)
-            sol = solve_compact(t, y, [0.0, 0.0], SIGMA, speed_mps=SPEED,
-                                correlation_s=corr_est, max_range_m=1.3 * (v * DURATION / 2 + d),
-                                n_grid=n_grid, n_headings=n_headings)
-            qe = np.array([sol.state[0], sol.state[1], np.arctan2(sol.state[2], sol.state[3])])
-            r_hat, g_hat = cpa_range_heading(qe, SPEED, [0.0, 0.0], DURATION / 2)
-            r_err.append(r_hat - d)
-            g_err.append(np.rad2deg((g_hat - HEADING + np.pi) % (2 * np.pi) - np.pi))
-        r_err, g_err = np.array(r_err), np.array(g_err)
-        qn = truth(d)
-        crlb_r, crlb_g = cpa_bounds(qn, t, corr_true, 0.0)
-        key = "v" if len(speeds) == 1 else f"v={v:.1f}"
-        out[key] = {
-            "true_speed_mps": v, "rmse_range_m": float(np.sqrt(np.mean(r_err**2))),
-            "bias_range_m": float(r_err.mean()), "rmse_heading_deg":
-                float(np.sqrt(np.mean(g_err**2))), "bias_heading_deg": float(g_err.mean()),
-            "crlb_range_m": crlb_r, "crlb_heading_deg": crlb_g,
-            "ratio_range": float(np.sqrt(np.mean(r_err**2)) / crlb_r),
-            "ratio_heading": float(np.sqrt(np.mean(g_err**2)) / crlb_g)}
-        if case == "speed_error":
-            br, bg = cpa_bounds(qn, t, 0.0, SIGMA_SPEED)
-            out[key]["crlb_range_with_speed_prior_m"] = br
-            out[key]["crlb_heading_with_speed_prior_deg"] = bg
-            out[key]["predicted_range_bias_m"] = float(d * (SPEED / v - 1))
-    return out
+from arrayproc.evaluate.scenarios.compact_paper import (
+    CORR,
+    CPAS,
+    DT,
+    DURATION,
+    SIGMA,
+    SPEED,
+    fig_1,
+)
 
 
 def plot(res: dict, outdir: Path) -> None:
@@ -155,6 +70,15 @@ def plot(res: dict, outdir: Path) -> None:
     plt.close(fig)
 
 
+def log(case: str, d: float, r: dict) -> None:
+    for k, v in r.items():
+        print(f"{case:11s} CPA {d:6.0f} m {k:6s}: range RMSE {v['rmse_range_m']:8.1f} m "
+              f"(bias {v['bias_range_m']:8.1f}, CRLB {v['crlb_range_m']:7.1f}, ratio "
+              f"{v['ratio_range']:.2f}); heading RMSE {v['rmse_heading_deg']:6.2f} deg "
+              f"(CRLB {v['crlb_heading_deg']:5.2f}, ratio {v['ratio_heading']:.2f})",
+              flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=50)
@@ -164,26 +88,14 @@ def main() -> int:
     ap.add_argument("--json", default=None)
     ap.add_argument("--plot", default=None)
     a = ap.parse_args()
-    rng = np.random.default_rng(a.seed)
     res: dict = {"runs": a.runs, "seed": a.seed, "cpa_m": list(CPAS), "speed_mps": SPEED,
                  "sigma_deg": float(np.rad2deg(SIGMA)), "correlation_s": CORR,
                  "duration_s": DURATION, "dt_s": DT, "grid": a.grid, "headings": a.headings,
                  "cases": {}}
     t0 = time.perf_counter()
-    for case in ("diagonal", "full", "mismatched", "speed_error"):
-        res["cases"][case] = {}
-        for d in CPAS:
-            r = run_case(d, case, a.runs, rng, a.grid, a.headings)
-            res["cases"][case][f"{int(d)}"] = r
-            for k, v in r.items():
-                print(f"{case:11s} CPA {d:6.0f} m {k:6s}: range RMSE {v['rmse_range_m']:8.1f} m "
-                      f"(bias {v['bias_range_m']:8.1f}, CRLB {v['crlb_range_m']:7.1f}, ratio "
-                      f"{v['ratio_range']:.2f}); heading RMSE {v['rmse_heading_deg']:6.2f} deg "
-                      f"(CRLB {v['crlb_heading_deg']:5.2f}, ratio {v['ratio_heading']:.2f})",
-                      flush=True)
-    met = all(abs(res["cases"][c][f"{int(d)}"]["v"][f"ratio_{q}"] - 1) <= 0.25
-              for c in ("diagonal", "full") for d in CPAS for q in ("range", "heading"))
-    res["target_met"] = met
+    mc = fig_1(a.runs, a.seed, a.grid, a.headings, log)
+    res["cases"] = mc["cases"]
+    met = res["target_met"] = mc["target_met"]
     res["wall_s"] = time.perf_counter() - t0
     print(f"diagonal and full within 25 % of the CRLB at every CPA: {met}", file=sys.stderr)
     if a.json:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.plane_wave import towed_tonal_plane_waves
 from tests.conftest import write_recording
 
 
@@ -28,12 +29,8 @@ def towed_tonals(path: Path, fs: float, duration: float, speed: float,
     if lateral_std > 0:
         k = (t // lateral_snapshot).astype(int)
         lat = rng.normal(0.0, lateral_std, k.max() + 1)[k]
-    x = np.zeros((t.size, n))
-    for f, cone, amp in waves:
-        u, s = np.cos(np.deg2rad(cone)), np.sin(np.deg2rad(cone))
-        along = speed * t[:, None] + pos[None, :, 0]
-        x += amp * np.cos(2 * np.pi * f * (t[:, None] + (lat[:, None] * s + along * u) / c)
-                          + rng.uniform(0, 2 * np.pi))
+    phases = [rng.uniform(0, 2 * np.pi) for _ in waves]
+    x = towed_tonal_plane_waves(t, pos, speed, waves, c, lat, phases)
     if noise_std > 0:
         x += noise_std * rng.standard_normal(x.shape)
     tn = np.arange(0.0, duration + 1.0, 1.0)

@@ -60,6 +60,25 @@ def load_chain(path: str) -> _chain.ChainSpec:
     ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings']
     """
     cfg, text = read_toml(path, "chain")
+    return chain_from_toml(cfg, text, path)
+
+
+def chain_from_toml(cfg: Mapping[str, Any], text: str, path: str) -> _chain.ChainSpec:
+    """Validate a chain file already parsed (:func:`arrayproc.config.read_toml`).
+
+    Parameters
+    ----------
+    cfg : mapping
+        The parsed TOML.
+    text : str
+        Its text (kept in the products file).
+    path : str
+        The file, for the messages.
+
+    Returns
+    -------
+    ChainSpec
+    """
     _load_types(cfg)
     try:
         return _chain.build_chain(cfg, text)

@@ -8,8 +8,8 @@ chosen one and turns what can go wrong into one line on stderr:
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
 * Python warnings (e.g. a diverging track): ``arrayproc: warning: …``;
-* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time`` on stdout, unless
-  ``-q`` (:mod:`arrayproc.app.progress`);
+* a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time, peak M MB`` on
+  stdout, unless ``-q`` (:mod:`arrayproc.app.progress`);
 * anything else is a bug: ``arrayproc: internal error: …``, status 70, with the traceback
   only when ``ARRAYPROC_DEBUG=1``.
 
@@ -33,7 +33,7 @@ from arrayproc.errors import ArrayprocError, Interrupted
 #: Modules that add sub-commands: each defines ``add_parser(sub)``. A new command module
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
 COMMAND_MODULES: tuple[str, ...] = ("arrayproc.app.commands", "arrayproc.app.batch",
-                                     "arrayproc.app.demo")
+                                     "arrayproc.app.demo", "arrayproc.app.catalogue")
 
 #: Signals that stop a run: exit status 128 + signal number.
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
@@ -201,6 +201,8 @@ def _stop_cause(e: BaseException) -> Interrupted | None:
 
 def _run(args: argparse.Namespace) -> int:
     try:
+        from arrayproc.app.catalogue import resolve_names
+        resolve_names(args)  # -c NAME: a shipped chain, tracker, TMA or scenario by name
         return int(args.func(args) or 0)
     except ArrayprocError as e:
         print(f"arrayproc: error: {' '.join(str(e).split())}", file=sys.stderr)

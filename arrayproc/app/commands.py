@@ -145,19 +145,15 @@ def process(recording: str, chain: str, output: str, positions: Any = None,
     if follow and not (math.isfinite(idle_s) and idle_s > 0):
         raise ConfigError(f"--idle must be a number of seconds > 0, got {idle_s}")
     from arrayproc.app.resources import check_chain_memory
-    from arrayproc.config import tomllib
+    from arrayproc.config import read_toml
     from arrayproc.io.recording import Recording
-    try:
-        with open(chain, "rb") as fh:
-            raw = tomllib.loads(fh.read().decode())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        raw = None  # load_chain below names the problem
     with Recording(recording, positions=positions, nan=nan, swmr=follow) as r:
-        if raw is not None:  # before any stage is built: parameters can ask for terabytes
-            check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
-        from arrayproc.app.api import load_chain, run_chain
+        raw, text = read_toml(chain, "chain")  # read once
+        # before any stage is built: parameters can ask for terabytes
+        check_chain_memory(chain, raw, r.n_channels, r.fs, max_memory)
+        from arrayproc.app.api import chain_from_toml, run_chain
         from arrayproc.io.products import ProductsWriter
-        spec = load_chain(chain)  # validated before any data is read
+        spec = chain_from_toml(raw, text, chain)  # validated before any data is read
         if follow:
             n = _follow(r, spec, recording, output, idle_s, warn, stats)
         else:
@@ -476,7 +472,7 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
         check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
     from arrayproc.track.runner import run_tracker
-    run_tracker(products, config, output, progress=progress)
+    run_tracker(products, config, output, progress=progress, cfg=cfg)
 
 
 def _products_source(products: str) -> str | None:
@@ -589,10 +585,13 @@ def _run_process(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     check_output(args.output, [args.recording, args.chain, *_geometry_inputs(args)])
     limit = parse_bytes(args.max_memory) if args.max_memory is not None else None
+    if args.idle is not None and not args.follow:
+        raise ConfigError("--idle needs --follow")
     stats: list = []
     n = process(args.recording, args.chain, args.output, positions=_geometry_of(args),
                 nan=args.nan, progress=bar_wanted(args) and not args.follow,
-                max_memory=limit, follow=args.follow, idle_s=args.idle, stats=stats)
+                max_memory=limit, follow=args.follow,
+                idle_s=10.0 if args.idle is None else args.idle, stats=stats)
     if stats and not args.quiet:
         print(latency_line(stats[0]))
     done(args.output, f"{products_what(args.output)}, {n} block{'s' * (n != 1)}",
@@ -700,7 +699,7 @@ def add_parser(sub: Any) -> None:
                    help="the recording is still being written (HDF5 SWMR): process each "
                         "block as it completes, write the products live, stop after --idle "
                         "seconds without new samples or at a signal")
-    s.add_argument("--idle", type=float, default=10.0, metavar="S",
+    s.add_argument("--idle", type=float, default=None, metavar="S",
                    help="with --follow: stop after S seconds without new samples (default 10)")
     s.set_defaults(func=_run_process)
 

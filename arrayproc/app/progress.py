@@ -5,7 +5,7 @@
   callback ``progress(done_s, total_s)``, so they need not know about tqdm.
 * :class:`Summary`: the one line every long command (simulate, import, process, track, tma,
   batch, export, demo) prints on stdout when it has finished, e.g.
-  ``arrayproc: wrote towed_products.h5 (3 groups) in 2.4 s, 125x real time``: what was
+  ``arrayproc: wrote towed_products.h5 (3 groups) in 2.4 s, 125x real time, peak 310 MB``: what was
   written, the wall time since the command started, and the audio's duration over that time
   when the audio behind the output is known (:func:`audio_seconds`). ``-q`` suppresses it.
 
@@ -79,7 +79,7 @@ def audio_bar(progress: bool, desc: str) -> AudioBar | None:
 # -- the summary line ---------------------------------------------------------------------------
 def format_seconds(t: float) -> str:
     """Wall time as ``0.42 s``, ``2.4 s``, ``153 s``."""
-    return f"{t:.2f} s" if t < 1 else f"{t:.1f} s" if t < 100 else f"{t:.0f} s"
+    return f"{t:.2g} s" if t < 10 else f"{t:.0f} s"  # two significant digits at least
 
 
 def format_ratio(r: float) -> str:
@@ -87,14 +87,27 @@ def format_ratio(r: float) -> str:
     return f"{r:.2g}x" if r < 1 else f"{r:.1f}x" if r < 10 else f"{r:.0f}x"
 
 
-def summary_line(written: str, what: str, wall_s: float, audio_s: float | None = None) -> str:
-    """``arrayproc: wrote WRITTEN (WHAT) in T s, Nx real time`` (the ratio only when the
-    audio's duration ``audio_s`` is known and positive)."""
+def summary_line(written: str, what: str, wall_s: float, audio_s: float | None = None,
+                 peak_mb: float | None = None) -> str:
+    """``arrayproc: wrote WRITTEN (WHAT) in T s, Nx real time, peak M MB`` (the ratio only when
+    the audio's duration ``audio_s`` is known and positive; the peak resident memory when
+    ``peak_mb`` is given)."""
     line = f"arrayproc: wrote {written}" + (f" ({what})" if what else "")
     line += f" in {format_seconds(wall_s)}"
     if audio_s and audio_s > 0 and wall_s > 0:
         line += f", {format_ratio(audio_s / wall_s)} real time"
+    if peak_mb:
+        line += f", peak {peak_mb:.0f} MB"
     return line
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process and of its largest finished child process (MB;
+    ``getrusage`` gives KiB on Linux)."""
+    import resource
+    kib = max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+              resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+    return kib / 1024.0
 
 
 class Summary:
@@ -124,7 +137,8 @@ class Summary:
 
     def __call__(self, written: str, what: str = "", audio_s: float | None = None) -> str:
         """Print (unless quiet) and return the line for ``written``."""
-        line = summary_line(written, what, time.perf_counter() - self.started, audio_s)
+        line = summary_line(written, what, time.perf_counter() - self.started, audio_s,
+                            peak_memory_mb())
         if not self.quiet:
             self.echo(line)
         return line

@@ -11,8 +11,13 @@ the samples in the file then are read to the end, the last block zero-padded exa
 :func:`arrayproc.chain.reader.read_blocks` pads it, so the products are those of a run on the
 file as it stands at the end.
 
-The latency of each block is measured from the poll that first saw its last sample to the
-flush after it went through the chain (:class:`FollowStats`).
+A growing ``/nav`` (a towed array's track written with the samples) is re-read as it grows,
+and a block waits until the track reaches its last sample, so the poses are those of the
+whole-file run. The recording's ``growing`` attribute is True until the stream's end is
+decided: a stage whose work depends on the recording's final length (``active_beams``: the
+last ping's receive window runs to the end) reads it. The latency of each block is measured
+from the poll that first saw its last sample to the flush after it went through the chain
+(:class:`FollowStats`).
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ import numpy as np
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.chain.graph import ChainSpec, compose, drive, set_rates
-from arrayproc.chain.stage import RunContext
+from arrayproc.chain.run import bind_chain
 from arrayproc.io.atomic import stop_requested
 
 
@@ -58,6 +63,7 @@ def follow_blocks(recording: Any, nfft: int, idle_s: float, poll_s: float,
     """
     nfft = int(nfft)
     fs = recording.fs
+    recording.growing = True  # stages that need the final length wait for it (active_beams)
     k = 0
     last_growth = time.monotonic()
     n_seen = -1
@@ -74,6 +80,13 @@ def follow_blocks(recording: Any, nfft: int, idle_s: float, poll_s: float,
             ending = True
             stats.reason = f"no new samples for {idle_s:g} s"
         full = n // nfft
+        # a block waits for the navigation to reach its end too (a towed array's /nav grows
+        # with the samples): its poses are then those of the whole-file run
+        nav_end = recording.nav_end() if hasattr(recording, "nav_end") else float("inf")
+        if not ending and np.isfinite(nav_end):
+            full = min(full, max(k, int(np.floor(nav_end * fs)) // nfft))
+        if ending:
+            recording.growing = False  # n is the final length from here on
         if ending and n > k * nfft:
             full = -(-n // nfft)  # the last, padded block too
         while k < full:
@@ -116,12 +129,9 @@ def follow_chain(recording: Any, spec: ChainSpec, products: Any = None, idle_s: 
     log : callable, optional
         Where the stages' warnings go.
     """
-    ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
-    if log is not None:
-        ctx.log = log
-    for s in spec.stages:
-        s.bind(ctx)
+    bind_chain(recording, spec, products, log)
     set_rates(spec, recording.fs)
+    recording.growing = True  # before any stage starts (they read it when they start)
     stats = FollowStats()
     flush = products.flush if products is not None else (lambda: None)
     source = follow_blocks(recording, spec.block, idle_s, poll_s, stats, after_block=flush)

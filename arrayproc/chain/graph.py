@@ -12,7 +12,7 @@ from typing import Any
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.chain.stage import STAGES, Stage
-from arrayproc.config import Param, positive, read_toml, tomllib
+from arrayproc.config import Param, Schema, parse_toml, positive, read_toml
 from arrayproc.errors import ConfigError
 
 
@@ -30,7 +30,8 @@ class ChainSpec:
         return [s.name for s in self.stages]
 
 
-INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive),
+INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=positive,
+                             unit="samples"),
               "array_shape": Param("str", "rigid", "element positions: the file's (rigid) or "
                                    "threaded on the /nav track (a water-pulled towed array)",
                                    choices=("rigid", "threaded"))}
@@ -39,10 +40,7 @@ INPUT_KEYS = {"block": Param("int", 8192, "samples per time block read", check=p
 def parse_chain(config: Mapping[str, Any] | str, text: str = "") -> tuple[Mapping[str, Any], str]:
     """A chain given as TOML text or as a parsed mapping, as ``(mapping, text)``."""
     if isinstance(config, str):
-        try:
-            return tomllib.loads(config), config
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"chain: invalid TOML ({e})") from None
+        return parse_toml(config, "chain"), config
     return config, text
 
 
@@ -61,12 +59,8 @@ def build_chain(config: Mapping[str, Any] | str, text: str = "") -> ChainSpec:
     inp = config.get("input", {})
     if not isinstance(inp, Mapping):
         raise ConfigError("chain: [input] must be a table")
-    for key in inp:
-        if key not in INPUT_KEYS:
-            raise ConfigError(f"chain: [input]: unknown key {key!r}")
-    block = INPUT_KEYS["block"].convert("chain: [input]: key 'block'", inp.get("block", 8192))
-    shape = INPUT_KEYS["array_shape"].convert("chain: [input]: key 'array_shape'",
-                                              inp.get("array_shape", "rigid"))
+    reader = Schema(INPUT_KEYS).check(inp, "chain: [input]")
+    block, shape = reader["block"], reader["array_shape"]
     tables = config.get("stage", [])
     if not isinstance(tables, list) or not tables:
         raise ConfigError("chain: needs at least one [[stage]] table")

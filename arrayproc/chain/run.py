@@ -13,6 +13,21 @@ from arrayproc.chain.stage import RunContext
 from arrayproc.io.units import recording_units
 
 
+def bind_chain(recording: Any, spec: ChainSpec, products: Any = None,
+               log: Callable[[str], None] | None = None) -> RunContext:
+    """Bind every stage of ``spec`` to one run's context (the recording, its sound speed, the
+    products writer, the log) and give the products the recording's sample unit; the whole-
+    file run and the live one (:mod:`arrayproc.chain.follow`) start the same way."""
+    ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
+    if log is not None:
+        ctx.log = log
+    if products is not None and hasattr(products, "set_units"):
+        products.set_units(recording_units(recording))  # levels are labelled from it
+    for s in spec.stages:
+        s.bind(ctx)
+    return ctx
+
+
 def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
               t_start: float | None = None, t_stop: float | None = None,
               progress: Callable[[float, float], None] | None = None,
@@ -24,13 +39,7 @@ def run_chain(recording: Any, spec: ChainSpec, products: Any = None,
     is called as ``progress(done_s, total_s)`` in seconds of audio after each block read (the
     command line's bar, :class:`arrayproc.app.progress.AudioBar`).
     """
-    ctx = RunContext(products=products, sound_speed=recording.sound_speed, recording=recording)
-    if log is not None:
-        ctx.log = log
-    if products is not None and hasattr(products, "set_units"):
-        products.set_units(recording_units(recording))  # levels are labelled from it
-    for s in spec.stages:
-        s.bind(ctx)
+    bind_chain(recording, spec, products, log)
     fs = recording.fs
     set_rates(spec, fs)
     margin = warmup_margin(spec, fs)

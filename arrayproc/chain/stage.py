@@ -7,6 +7,8 @@ when imported, and the application layer imports them (:func:`arrayproc.stages.l
 
 from __future__ import annotations
 
+import inspect
+import re
 import sys
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
@@ -15,7 +17,7 @@ from typing import Any, ClassVar
 
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
-from arrayproc.config import Param
+from arrayproc.config import Param, Schema
 from arrayproc.errors import ConfigError
 
 
@@ -58,18 +60,8 @@ class Stage(ABC):
 
     def __init__(self, name: str | None = None, **values: Any) -> None:
         self.name = name or self.kind
-        where = f"stage {self.name!r}"
-        for key in values:
-            if key not in self.params:
-                raise ConfigError(f"{where}: unknown key {key!r} for type {self.kind!r} "
-                                  f"(known: {', '.join(sorted(self.params)) or 'none'})")
-        for key, p in self.params.items():
-            if key in values:
-                setattr(self, key, p.convert(f"{where}: key {key!r}", values[key]))
-            elif p.required:
-                raise ConfigError(f"{where}: missing required key {key!r}")
-            else:
-                setattr(self, key, p.default)
+        schema = self.params if isinstance(self.params, Schema) else Schema(self.params)
+        schema.apply(self, values, f"stage {self.name!r}", of=f" for type {self.kind!r}")
         self.ctx = RunContext()
         self.validate()
 
@@ -123,8 +115,45 @@ STAGES: dict[str, type[Stage]] = {}
 
 
 def register(cls: type[Stage]) -> type[Stage]:
-    """Class decorator: make a stage type available to chain files under ``cls.kind``."""
+    """Class decorator: make a stage type available to chain files under ``cls.kind``.
+
+    The declared ``params`` become the class's :class:`~arrayproc.config.Schema`, and the
+    class gets a constructor whose signature and docstring list every key with its type,
+    default, unit and doc (``help(CBF)``), generated from the same declarations.
+    """
     if not cls.kind:
         raise TypeError(f"{cls.__name__} has no kind")
+    cls.params = Schema(cls.params, _summary(cls))
+    _document(cls)
     STAGES[cls.kind] = cls
     return cls
+
+
+def _summary(cls: type[Stage]) -> str:
+    """The first paragraph of the class docstring, without its pointer to the module doc."""
+    first = (inspect.getdoc(cls) or "").split("\n\n")[0].replace("\n", " ")
+    first = re.sub(r"\s*(;\s*|\()see (the )?module doc(string)?\)?", "", first).rstrip(".")
+    return first + "." if first else ""
+
+
+def _document(cls: type[Stage]) -> None:
+    """Give a stage class a constructor whose signature and docstring come from its keys."""
+    schema: Schema = cls.params  # type: ignore[assignment]
+    if "__init__" not in cls.__dict__:
+        def __init__(self, name: str | None = None, **values: Any) -> None:
+            Stage.__init__(self, name, **values)
+        __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+        cls.__init__ = __init__  # type: ignore[method-assign]
+    first = [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+             inspect.Parameter("name", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None,
+                               annotation="str | None")]
+    section = schema.numpydoc()
+    name_doc = ("name : str, optional\n    The stage's name in the chain and of its products "
+                f"group (default ``{cls.kind!r}``).")
+    section = section.replace("----------\n", "----------\n" + name_doc + "\n", 1)
+    init = cls.__init__
+    init.__signature__ = schema.signature(first)  # type: ignore[attr-defined]
+    init.__doc__ = (f"A ``{cls.kind}`` stage; each key of its chain-file table is a keyword."
+                    f"\n\n{section}\n")
+    cls.__signature__ = schema.signature(first[1:])  # type: ignore[attr-defined]
+    cls.__doc__ = (inspect.cleandoc(cls.__doc__ or "") + "\n\n" + section).lstrip()

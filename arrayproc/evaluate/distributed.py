@@ -8,8 +8,8 @@ worker, two or a cluster give the same numbers, bit for bit. They differ from a 
 run of :func:`arrayproc.evaluate.montecarlo.run_case` over all runs at once, which draws every
 run from one generator.
 
-:func:`tma_chunk` is a chunk of the batch-TMA Monte Carlo (thesis fig. 3.19,
-``scripts/reproduce_batch_tma.py``).
+The batch-TMA Monte Carlo of thesis fig. 3.19 is spread the same way
+(:func:`arrayproc.evaluate.scenarios.thesis_tma.tma_chunk`).
 
 :func:`lr_table` computes the L-R paper's table I (Das, Tiwari & Bhaumik, section V: track loss
 with the side known and resolved, eqs. (9)-(13); final RMSE; true-side share) this way; the
@@ -262,92 +262,3 @@ def lr_table(runs: int, seed: int, cases: Sequence[int], filters: Sequence[str],
                 "rmse_pos_m": rmse_pos, "rmse_vel_mps": rmse_vel, "bias_norm_m": bias,
             }
     return table
-
-
-def solver_seeds(seed: int, n_runs: int) -> list[int]:
-    """32-bit seeds of the solvers of runs ``0..n_runs-1`` of a chunk seeded ``seed``: 32 bits
-    of ``SeedSequence([seed, i])`` (scipy's differential evolution takes int seeds below 2**32).
-
-    Parameters
-    ----------
-    seed : int
-        The chunk's seed.
-    n_runs : int
-        Runs in the chunk.
-
-    Returns
-    -------
-    list of int
-    """
-    return [int(np.random.SeedSequence([seed, i]).generate_state(1)[0]) for i in range(n_runs)]
-
-
-def tma_chunk(n_runs: int, seed: int, times: np.ndarray, observer_pos: np.ndarray,
-              elements_xy: np.ndarray, heading_rad: np.ndarray, state: np.ndarray,
-              sigma_theta_rad: float, sigma_tau_s: float, sound_speed: float = 1500.0,
-              seeds: Sequence[int] | None = None,
-              log: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
-    """``n_runs`` Monte Carlo runs of bearings-only and time-delay TMA (thesis 3.3.3, fig.
-    3.19): each run draws Gaussian errors on the bearings (σ_θ) and then on the delays (σ_τ)
-    of the true source, from ``numpy.random.default_rng(seed)``, and solves both estimators
-    (thesis eqs. (3.45)-(3.47) and (3.48)-(3.52)).
-
-    Parameters
-    ----------
-    n_runs : int
-        Runs.
-    seed : int
-        Seed of the measurement errors.
-    times : (B,) array
-        Bearing/delay times, s.
-    observer_pos : (B, 2) array
-        Array (reference) positions, m.
-    elements_xy : (B, H, 2) array
-        Element positions, m (element 0 is the delays' reference).
-    heading_rad : (B,) array
-        Array headings, rad.
-    state : (4,) array
-        True source state at the first time, m and m/s.
-    sigma_theta_rad : float
-        Bearing error standard deviation, rad.
-    sigma_tau_s : float
-        Delay error standard deviation, s.
-    sound_speed : float
-        m/s.
-    seeds : sequence of int, optional
-        Solver seed of each run (default :func:`solver_seeds` of ``seed``).
-    log : callable, optional
-        Called with the number of runs done after each run.
-
-    Returns
-    -------
-    dict
-        ``"bearings"``, ``"delays"``: (n_runs, 4) state errors (estimate − truth), m and m/s;
-        ``"seconds_bearings"``, ``"seconds_delays"``: solver time summed over the runs, s.
-    """
-    import time
-
-    from arrayproc.track.batch.bo_tma import bearing_model, solve_bearings
-    from arrayproc.track.batch.td_tma import delay_model, solve_delays
-    x = np.asarray(state, dtype=float)
-    hb = bearing_model(x, times, observer_pos)
-    hd = delay_model(x, times, elements_xy, 0, sound_speed)
-    seeds = solver_seeds(seed, n_runs) if seeds is None else list(seeds)
-    rng = np.random.default_rng(seed)
-    err_b, err_d = np.empty((n_runs, 4)), np.empty((n_runs, 4))
-    t_b = t_d = 0.0
-    for i in range(n_runs):
-        yb = hb + rng.normal(0, sigma_theta_rad, hb.shape)
-        yd = hd + rng.normal(0, sigma_tau_s, hd.shape)
-        t0 = time.perf_counter()
-        sb = solve_bearings(times, yb, observer_pos, sigma_theta_rad, seed=seeds[i])
-        t1 = time.perf_counter()
-        sd = solve_delays(times, yd, elements_xy, sigma_tau_s, sound_speed=sound_speed,
-                          heading_rad=heading_rad, seed=seeds[i])
-        t_b += t1 - t0
-        t_d += time.perf_counter() - t1
-        err_b[i], err_d[i] = sb.state - x, sd.state - x
-        if log is not None:
-            log(i + 1)
-    return {"bearings": err_b, "delays": err_d, "seconds_bearings": np.float64(t_b),
-            "seconds_delays": np.float64(t_d)}

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from arrayproc.geo.angles import true_bearing, wrap_pi
-from arrayproc.geo.kinematics import KNOT, Segment, Trajectory
+from arrayproc.geo.kinematics import KNOT, Leg, Trajectory
 from arrayproc.track.crlb import bearings_only_crlb, polar_prior_covariance, position_rmse_bound
 from arrayproc.track.filters import make_filter
 from arrayproc.track.init import TrackPrior
@@ -68,7 +68,7 @@ class LRScenario:
     def target(self) -> Trajectory:
         rate = 0.0 if self.case == 1 else -self.target_turn_deg_min / 60.0  # deg/s clockwise
         return Trajectory(self.target_start, self.target_course_deg,
-                          [Segment(self.duration, self.target_speed, rate)])
+                          [Leg(self.duration, self.target_speed, rate)])
 
     def geometry(self) -> dict[str, np.ndarray]:
         """Observer state (K, 4), heading (K,) rad, target state (K, 4), relative truth (K, n)."""

@@ -21,7 +21,7 @@ from arrayproc.errors import ConfigError
 # the angle helpers live in geo.angles; re-exported here for existing imports
 from arrayproc.geo.angles import interp_angle_deg, true_bearing, wrap_180, wrap_pi
 
-__all__ = ["KNOT", "Segment", "Trajectory", "course_to_velocity", "interp_angle_deg",
+__all__ = ["KNOT", "Leg", "Trajectory", "course_to_velocity", "interp_angle_deg",
            "true_bearing", "wrap_180", "wrap_pi"]
 
 KNOT = 1852.0 / 3600.0  # m/s per knot
@@ -34,7 +34,7 @@ def course_to_velocity(course_deg: np.ndarray | float, speed: np.ndarray | float
 
 
 @dataclass(frozen=True)
-class Segment:
+class Leg:
     """Constant speed (m/s) and turn rate (deg/s, > 0 clockwise) for ``duration`` s."""
 
     duration: float
@@ -52,14 +52,14 @@ class Trajectory:
         Position (x east, y north) in m at ``t0``.
     course : float
         Initial course, deg true.
-    segments : sequence of Segment
+    segments : sequence of Leg
         Consecutive segments; after the last one the final state is held (straight line at the
         last speed and course).
     t0 : float
         Time (s) of ``start``.
     """
 
-    def __init__(self, start: Sequence[float], course: float, segments: Sequence[Segment],
+    def __init__(self, start: Sequence[float], course: float, segments: Sequence[Leg],
                  t0: float = 0.0) -> None:
         self.start = np.asarray(start, dtype=float).reshape(2)
         self.course0 = float(course)
@@ -134,7 +134,7 @@ class Trajectory:
         """
         if not legs:
             raise ConfigError("trajectory: at least one leg is required")
-        segments: list[Segment] = []
+        segments: list[Leg] = []
         c0 = float(legs[0]["course"] if course is None else course)
         cur = c0
         for i, leg in enumerate(legs):
@@ -161,10 +161,10 @@ class Trajectory:
                 if t_turn > duration + 1e-9:
                     raise ConfigError(
                         f"trajectory leg {i}: the turn needs {t_turn:.1f} s, longer than the leg")
-                segments.append(Segment(t_turn, speed, float(np.sign(delta)) * rate))
+                segments.append(Leg(t_turn, speed, float(np.sign(delta)) * rate))
             elif abs(delta) > 1e-12:
                 jump = delta  # instant course change at the start of the straight part
-            segments.append(Segment(duration - t_turn, speed, 0.0, jump))
+            segments.append(Leg(duration - t_turn, speed, 0.0, jump))
             cur = target
         return cls(start, c0, segments, t0)
 

@@ -247,8 +247,9 @@ def _polar_initiator_class() -> type:
             for d in detections:
                 mm = d.measurement_model
                 R = np.asarray(mm.covar(), float)
-                model = BearingRangeRate(math.sqrt(R[0, 0]), math.sqrt(R[1, 1]),
-                                         math.sqrt(R[2, 2]))
+                model = BearingRangeRate(sigma_bearing=math.sqrt(R[0, 0]),
+                                         sigma_range=math.sqrt(R[1, 1]),
+                                         sigma_range_rate=math.sqrt(R[2, 2]))
                 z = np.asarray(d.state_vector, float).reshape(-1)
                 own = np.r_[np.asarray(mm.translation_offset, float).reshape(-1),
                             np.asarray(mm.velocity, float).reshape(-1)]

@@ -426,11 +426,31 @@ class Recording:
 
     def refresh(self) -> int:
         """Samples now in the file: re-reads ``/time_data``'s length, which a writer in SWMR
-        mode grows (a recording opened with ``swmr=True``; otherwise the length at open)."""
+        mode grows (a recording opened with ``swmr=True``; otherwise the length at open), and
+        ``/nav`` when the writer grew it too (all its datasets to one new length)."""
         if self.swmr:
             self._td.refresh()
             self.n_samples = int(self._td.shape[0])
+            self._refresh_nav()
         return self.n_samples
+
+    def _refresh_nav(self) -> None:
+        g = self._f.get("nav")
+        if not isinstance(g, h5py.Group):
+            return
+        sets = [g[k] for k in ("time", "position", "heading", "depth")
+                if isinstance(g.get(k), h5py.Dataset)]
+        for d in sets:
+            d.refresh()
+        lengths = {int(d.shape[0]) for d in sets}
+        if len(lengths) == 1 and lengths.pop() != self.nav.time.size:
+            self.nav = self._read_nav()
+            self._static_pose = None
+
+    def nav_end(self) -> float:
+        """Time of the last ``/nav`` row (s); ``inf`` for a static array (one row or none)."""
+        t = self.nav.time
+        return float(t[-1]) if t.size > 1 else float("inf")
 
     def pose(self, t: float) -> Pose:
         """The array's pose at time t (s): reference point, heading, element world positions."""

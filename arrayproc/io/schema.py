@@ -191,7 +191,7 @@ _KINDS = [
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
-        # multi-target mode (track/multi.py)
+        # multi-target mode (track/multi/)
         "cone_deg": _c("deg", "cone angle of a bearing track's cone filter", False),
         "sigma_cone_deg": _c("deg", "1-sigma of cone_deg", False),
         "row": _c("", "measurement row used (index in its products group; -1 coasted)",
@@ -213,6 +213,9 @@ _KINDS = [
         "speed_mps": _c("m/s", "target speed"),
         "range_sigma_m": _c("m", "range standard deviation from the CRLB (eq. 3.55)", False),
         "cost_mirror": _c("", "cost of the mirrored side hypothesis", False),
+        "preferred": _c("", "1: the solution the data prefer; 0: its mirror (sides flipped), "
+                        "written while the manoeuvre has not resolved the side", False,
+                        dtype="i1"),
     }),
 ]
 

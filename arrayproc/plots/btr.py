@@ -1,4 +1,5 @@
-"""BTR plot: cone angle across, time running down, dB with a fixed dynamic range."""
+"""BTR plot: cone angle (or relative bearing) across, time running down, dB with a fixed
+dynamic range."""
 
 from __future__ import annotations
 
@@ -41,17 +42,21 @@ def plot_btr(path: str, out_png: str, range_db: float = 20.0, beam: float | None
         cb = fig.colorbar(im, ax=ax, pad=0.02)
         cb.set_label(f"beam power Σ|Y|², {level_label(file_units(root), '²')}, unnormalised "
                      f"({range_db:g} dB range)")
+    lr = str(g["attrs"].get("beam_mode", "cone")) == "lr"
     rec = open_truth_recording(root) if truth and elev is None else None
     if rec is not None:
-        from arrayproc.io.truth import cone_angles
+        from arrayproc.io.truth import cone_angles, relative_bearings
         with rec:
-            for i, (name, c) in enumerate(cone_angles(rec, t).items()):
+            truth_fn = relative_bearings if lr else cone_angles
+            for i, (name, c) in enumerate(truth_fn(rec, t).items()):
                 ax.plot(c, t, ls=":", lw=1.2, alpha=0.8, color=f"C{(i + 1) % 10}",
                         label=f"truth: {name}")
         ax.legend(loc="lower right", fontsize=8, framealpha=0.7)
     ax.set_xlim(min(cone[0], cone[-1]), max(cone[0], cone[-1]))
     ax.set_ylim(t[-1] if t.size else 1, t[0] if t.size else 0)
-    if elev is None:
+    if lr:
+        ax.set_xlabel("relative bearing (deg; 0 = forward, + starboard, − port)")
+    elif elev is None:
         ax.set_xlabel("cone angle (deg; 0 = forward end-fire, 90 = broadside)")
     else:
         ax.set_xlabel(f"bearing relative to the array's forward axis (deg), elevation {elev:g} deg")

@@ -44,7 +44,7 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
     tr = None
     if truth and src and Path(src).is_file():
         from arrayproc.io.recording import Recording
-        from arrayproc.plots._active import echo_truth
+        from arrayproc.io.truth import echo_truth
         with Recording(src) as rec:
             tr = echo_truth(rec)
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.0, 5.5), dpi=110,
@@ -63,7 +63,7 @@ def plot_contacts(path: str, out_png: str, doppler_mps: float = 5.0, threshold_k
     cb.set_label("absolute Doppler (m/s, eq. 4.9)")
     clutter = np.ones(c["range_m"].size, bool)
     if tr is not None:
-        from arrayproc.plots._active import associate
+        from arrayproc.evaluate.association import associate
         tg = tr["kind"] == "target"
         ax.plot(tr["cone_deg"][tg], tr["range_m"][tg], "k+", ms=12, mew=1.5, zorder=5,
                 label="truth: target echoes")

@@ -55,7 +55,7 @@ def plot_range_doppler(path: str, out_png: str, range_db: float = 30.0, ping: in
     src = src.decode() if isinstance(src, bytes) else str(src)
     if truth and src and Path(src).is_file():
         from arrayproc.io.recording import Recording
-        from arrayproc.plots._active import echo_truth
+        from arrayproc.io.truth import echo_truth
         with Recording(src) as rec:
             tr = echo_truth(rec)
         if tr is not None:

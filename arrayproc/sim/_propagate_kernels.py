@@ -68,6 +68,19 @@ def _gain(r: float, amp_mode: int, r_t: float, gtab: np.ndarray, g_r0: float,
 
 
 @njit(cache=True, inline="always")
+def _element(k: int, ch: int, epos: np.ndarray, rpos: np.ndarray, rdepth: np.ndarray,
+             sin_h: np.ndarray, cos_h: np.ndarray, lateral: np.ndarray,
+             body: np.ndarray) -> tuple[float, float, float]:
+    """World position of element ch at sample k: from ``epos`` (a bending array) when it has
+    rows, else the rigid pose (body position rotated by the heading, lateral offset added)."""
+    if epos.shape[0] > 0:
+        return epos[k, ch, 0], epos[k, ch, 1], epos[k, ch, 2]
+    by = body[ch, 1] + lateral[k]
+    return (rpos[k, 0] + body[ch, 0] * sin_h[k] + by * cos_h[k],
+            rpos[k, 1] + body[ch, 0] * cos_h[k] - by * sin_h[k], rdepth[k] + body[ch, 2])
+
+
+@njit(cache=True, inline="always")
 def _rough(rough: float, dz: float, dist: float) -> float:
     """exp(−rough·sin²θ), sin θ = |dz|/dist: the coherent reflection of a rough surface."""
     s = dz / max(dist, 1e-6)
@@ -136,7 +149,6 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
     factor exp(−rough·sin²θ), θ the grazing angle of the path to each element (0: smooth).
     Parallel over blocks of samples; the result of a sample does not depend on the blocking.
     """
-    bent = epos.shape[0] > 0
     n = out.shape[0]
     nch = out.shape[1]
     half = table.shape[1] // 2
@@ -146,23 +158,9 @@ def oneway_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray,
         tau = np.empty(nch)
         zel = np.empty(nch)
         for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            sh = sin_h[k]
-            chd = cos_h[k]
-            rx = rpos[k, 0]
-            ry = rpos[k, 1]
-            rz = rdepth[k]
-            lat = lateral[k]
             t0 = ref_tau[k]
             for ch in range(nch):
-                if bent:
-                    ex = epos[k, ch, 0]
-                    ey = epos[k, ch, 1]
-                    ez = epos[k, ch, 2]
-                else:
-                    by = body[ch, 1] + lat
-                    ex = rx + body[ch, 0] * sh + by * chd
-                    ey = ry + body[ch, 0] * chd - by * sh
-                    ez = rz + body[ch, 2]
+                ex, ey, ez = _element(k, ch, epos, rpos, rdepth, sin_h, cos_h, lateral, body)
                 tau[ch] = _solve(ex, ey, ez, t0, spos, svel, sacc, k, c)
                 zel[ch] = ez
             tk = t[k]
@@ -201,7 +199,6 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
     (identity: 0, 1); the projector states are the transmit leg's image. ``rough_r`` and
     ``rough_t``: each leg's rough-surface exponent, as ``rough`` of :func:`oneway_accumulate`.
     """
-    bent = epos.shape[0] > 0
     n = t.shape[0]
     nch = out.shape[1]
     half = table.shape[1] // 2
@@ -210,21 +207,10 @@ def echo_accumulate(out: np.ndarray, k0: int, ts_ref: np.ndarray, tpos: np.ndarr
     nblk = (n + BLOCK - 1) // BLOCK
     for b in prange(nblk):
         for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            sh = sin_h[k]
-            chd = cos_h[k]
-            lat = lateral[k]
             tk = t[k]
             tau0 = tk - ts_ref[k]
             for ch in range(nch):
-                if bent:
-                    ex = epos[k, ch, 0]
-                    ey = epos[k, ch, 1]
-                    ez = epos[k, ch, 2]
-                else:
-                    by = body[ch, 1] + lat
-                    ex = rpos[k, 0] + body[ch, 0] * sh + by * chd
-                    ey = rpos[k, 1] + body[ch, 0] * chd - by * sh
-                    ez = rdepth[k] + body[ch, 2]
+                ex, ey, ez = _element(k, ch, epos, rpos, rdepth, sin_h, cos_h, lateral, body)
                 # receive leg: c·τ2 = |e − x_T(t − τ2)|, t_s = t − τ2
                 tau2 = _solve(ex, ey, ez, tau0, tpos, tvel, tacc, k, c)
                 ts = tk - tau2
@@ -289,19 +275,12 @@ def table_accumulate(out: np.ndarray, ref_tau: np.ndarray, spos: np.ndarray, sve
     nch = out.shape[1]
     half = table.shape[1] // 2
     ns = sig.shape[0]
-    bent = epos.shape[0] > 0
     nblk = (n + BLOCK - 1) // BLOCK
     for b in prange(nblk):
         for k in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             t0 = ref_tau[k]
             for ch in range(nch):
-                if bent:
-                    ex = epos[k, ch, 0]
-                    ey = epos[k, ch, 1]
-                else:
-                    by = body[ch, 1] + lateral[k]
-                    ex = rpos[k, 0] + body[ch, 0] * sin_h[k] + by * cos_h[k]
-                    ey = rpos[k, 1] + body[ch, 0] * cos_h[k] - by * sin_h[k]
+                ex, ey, _ = _element(k, ch, epos, rpos, rdepth, sin_h, cos_h, lateral, body)
                 tau = t0
                 x = 0.0
                 for _ in range(3):

@@ -9,7 +9,9 @@ A(r)e^{iφ(r)} are linear in range between grid points. Each family is rendered 
 sample and element (so its own Doppler), the phase applied through the Hilbert transform of
 the source signal. Amplitudes and phases are those of the ray trace at ``freq``: exact for
 tonals at that frequency, an approximation across a band. Element depth offsets from the
-array depth are neglected (the table is for the array depth).
+array depth are neglected (the table is for the array depth). The Hilbert transformer
+(2·``HILBERT_HALF`` + 1 taps at the source rate 2·fs, Hann window) is accurate from about
+fs/50 up to the simulator's band edge; a phase other than 0 or π is approximate below that.
 """
 
 from __future__ import annotations

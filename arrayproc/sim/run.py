@@ -83,8 +83,11 @@ class Simulator:
             self.sources.append((mover, SourceSignal(sp, mover, self.fs_src, seed, i), sp.depth))
         self.bellhop = None  # source depth -> BELLHOP ray families
         if scen.propagation.bellhop is not None:
-            self.bellhop = {float(d): FamilyPaths(scen.propagation.bellhop, self.c, float(d),
-                                                  float(arr.depth))
+            bh = scen.propagation.bellhop
+            if bh.max_range is None:  # every source's farthest horizontal range, with margin
+                bh.max_range = self._max_range()
+                bh.range_step = max(bh.range_step, bh.max_range / 20000)
+            self.bellhop = {float(d): FamilyPaths(bh, self.c, float(d), float(arr.depth))
                             for d in sorted({float(x[2]) for x in self.sources})}
             self._hilbert = hilbert_fir()
         self.noise = (ambient_noise(scen.noise, self.fs, self.n_channels, seed)
@@ -98,6 +101,15 @@ class Simulator:
                 pt = PingTrain(self.active)
                 self.sources.append((pt.mover, pt, pt.depth))
         self._check()
+
+    def _max_range(self) -> float:
+        """Largest horizontal source-to-array distance over the run (and the 10 s before it,
+        for retarded times), × 1.2 + 100 m: the range the BELLHOP arrivals must cover."""
+        t = np.linspace(-10.0, self.s.duration, 512)
+        ref = self.own.state3(t)[0][:, :2]
+        far = max((float(np.max(np.hypot(*(m.state3(t)[0][:, :2] - ref).T)))
+                   for m, _, _ in self.sources), default=100.0)
+        return 1.2 * far + self.extent + 100.0
 
     def _mean_own_speed(self) -> float:
         segs = self.s.ownship.segments

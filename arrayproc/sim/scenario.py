@@ -135,14 +135,14 @@ class BellhopSpec:
     """``multipath = "bellhop"`` with ``[propagation.bellhop]``: a range-independent
     environment whose BELLHOP arrivals are the propagation paths."""
 
-    depth: float  # m, flat bottom
-    freq: float  # Hz, frequency of the ray trace (amplitudes and phases)
-    max_range: float  # m
+    depth: float | None = None  # m, flat bottom; None: the TL tables' Munk environment
+    freq: float | None = None  # Hz of the ray trace; None: the loudest tonal's (or band centre)
+    max_range: float | None = None  # m; None: from the scenario's geometry
     range_step: float = 10.0  # m
     ssp: np.ndarray | None = None  # (n, 2) depth m, speed m/s; None: isovelocity
     bottom_speed: float = 1600.0
     bottom_density: float = 1.8  # g/cm³
-    bottom_atten: float = 0.5  # dB/λ
+    bottom_atten: float = 0.5  # dB/λ (0.8 in the Munk environment)
     n_beams: int = 0  # 0: BELLHOP chooses
 
 
@@ -357,7 +357,7 @@ def _multipath(pt: _Table, loss: str) -> MultipathSpec:
     """The ``multipath = { … }`` inline table of ``[propagation]``."""
     if not isinstance(pt.raw("multipath"), dict):
         raise pt.err("multipath", "must be a table {surface, bottom_depth, bottom_loss_db, "
-                     f"order, …}}, got {pt.raw('multipath')!r}")
+                     f"order, …}} or \"bellhop\", got {pt.raw('multipath')!r}")
     if loss != "spherical":
         raise pt.err("multipath", f"image sources need loss = \"spherical\" (a {loss} law "
                      "already stands for the boundaries' contribution)")
@@ -380,23 +380,39 @@ def _bellhop(pt: _Table, loss: str, c: float) -> BellhopSpec:
     if loss != "spherical":
         raise pt.err("multipath", f"BELLHOP arrivals replace the loss law; leave loss = "
                      f"\"spherical\" (got {loss!r})")
-    bt = pt.sub("bellhop", required=True)
+    bt = pt.sub("bellhop") or _Table({}, "propagation.bellhop", pt.file)
     ssp = bt.matrix("ssp", 2)
-    spec = BellhopSpec(bt.num("depth", required=True, positive=True),
-                       bt.num("freq", required=True, positive=True),
-                       bt.num("max_range", required=True, positive=True),
+    munk = not bt.has("depth")
+    if munk and ssp is not None:
+        raise bt.err("ssp", "give the bottom depth too")
+    spec = BellhopSpec(bt.num("depth", None, positive=True),
+                       bt.num("freq", None, positive=True),
+                       bt.num("max_range", None, positive=True),
                        bt.num("range_step", 10.0, positive=True), ssp,
                        bt.num("bottom_speed", 1600.0, positive=True),
                        bt.num("bottom_density", 1.8, positive=True),
-                       bt.num("bottom_atten", 0.5, nonneg=True),
+                       bt.num("bottom_atten", 0.8 if munk else 0.5, nonneg=True),
                        bt.int_("n_beams", 0, minimum=0))
+    if munk:  # the environment of the bundled TL tables (SPL paper appendix)
+        from arrayproc.acoustics.tl.bellhop import MUNK_APPENDIX
+        spec.depth, spec.ssp = float(MUNK_APPENDIX[-1, 0]), MUNK_APPENDIX.copy()
     if ssp is not None and (np.any(np.diff(ssp[:, 0]) <= 0) or ssp[0, 0] != 0.0
                             or ssp[-1, 0] != spec.depth):
         raise bt.err("ssp", "depths must increase from 0 to the bottom depth")
-    if spec.max_range / spec.range_step > 20000:
+    if spec.max_range is not None and spec.max_range / spec.range_step > 20000:
         raise bt.err("range_step", "more than 20000 ranges; use a coarser step")
     bt.done()
     return spec
+
+
+def _bellhop_freq(sources: list[SourceSpec]) -> float:
+    """Frequency of the ray trace when not given: the loudest tonal's, else the centre of the
+    first broadband band."""
+    tonals = [t for sp in sources for t in sp.tonals]
+    if tonals:
+        return float(max(tonals, key=lambda t: t.level_db).freq)
+    bands = [sp.broadband.band for sp in sources if sp.broadband is not None]
+    return float(0.5 * (bands[0][0] + bands[0][1])) if bands else 50.0
 
 
 def _check_waveguide(mp: MultipathSpec, array: ArraySpec, sources: list[SourceSpec],
@@ -572,6 +588,8 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                               "sources only (active echoes: use the image-source table)")
         _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
                          None, file)
+        if prop.bellhop.freq is None:
+            prop.bellhop.freq = _bellhop_freq(sources)
     for sp in sources:
         for i, ton in enumerate(sp.tonals):
             f_end = ton.freq + ton.drift_hz_per_s * duration

@@ -52,3 +52,26 @@ def load_all() -> None:
     """Import every stage module, which registers every stage type."""
     for mod in sorted(set(TYPES.values())):
         importlib.import_module(mod)
+
+
+def markdown_table() -> str:
+    """The stage-key table of docs/formats.md, made from the stages' declarations.
+
+    Returns
+    -------
+    str
+        A Markdown table: stage type (on its first row), key, type, default, unit and
+        description, one row per key, the package's stage types (:data:`TYPES`) in
+        alphabetical order.
+    """
+    from arrayproc.chain.stage import STAGES
+    from arrayproc.config import markdown_header
+    load_all()
+    rows = markdown_header(True, "stage")
+    for kind in sorted(TYPES):
+        cls = STAGES[kind]
+        if cls.params:
+            rows.append(cls.params.markdown(first=kind))
+        else:
+            rows.append(f"| `{kind}` | (no keys) | | | | {cls.params.summary} |")
+    return "\n".join(rows)

@@ -9,10 +9,10 @@ straight onto components.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, ClassVar
 
-from arrayproc.config import Param
-from arrayproc.errors import ConfigError
+from arrayproc.config import Param, Schema
 
 __all__ = ["Component", "Param"]
 
@@ -24,22 +24,21 @@ class Component:
     params: ClassVar[dict[str, Param]] = {}
 
     def __init__(self, **kwargs: Any) -> None:
-        declared = self.all_params()
-        for key in kwargs:
-            if key not in declared:
-                raise ConfigError(f"{self.name}: unknown parameter {key!r} (one of "
-                                  f"{', '.join(declared) or 'none'})")
-        for key, p in declared.items():
-            if key in kwargs:
-                value = kwargs[key]
-                if value is not None or p.default is not None:
-                    value = p.convert(f"{self.name}.{key}", value)
-            elif p.required:
-                raise ConfigError(f"{self.name}: parameter {key!r} is required")
-            else:
-                value = p.default
-            setattr(self, key, value)
+        Schema(self.all_params()).apply(self, kwargs, self.name)
         self._setup()
+
+    def __init_subclass__(cls, **kw: Any) -> None:
+        """Give each component class the signature and a numpydoc ``Parameters`` section of
+        its declared parameters (``help(UKF)``, ``inspect.signature(UKF)``)."""
+        super().__init_subclass__(**kw)
+        schema = Schema(cls.all_params())
+        if "__init__" in cls.__dict__:
+            cls.__signature__ = None  # type: ignore[attr-defined]  # its own, not a base's
+        elif schema:
+            cls.__signature__ = schema.signature()  # type: ignore[attr-defined]
+            doc = inspect.cleandoc(cls.__doc__ or "")
+            if "Parameters\n----------" not in doc:
+                cls.__doc__ = (doc + "\n\n" + schema.numpydoc()).lstrip()
 
     @classmethod
     def all_params(cls) -> dict[str, Param]:

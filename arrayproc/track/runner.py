@@ -1,36 +1,46 @@
 """``arrayproc track``: one entry for every tracker configuration.
 
-``[tracker] mode = "single"`` (the default; the papers' reproductions) runs the single-target
-bearings tracker of :mod:`arrayproc.track.single`; ``mode = "multi"`` runs the track manager
-over every contact (:mod:`arrayproc.track.multi`), or with ``measurements = "delays"`` the
-recursive TDOA position tracker (:mod:`arrayproc.track.delays`). This module only
-dispatches, so neither runner imports the other's entry point (no import cycle).
+The tracker TOML is read once (:func:`arrayproc.config.read_toml`) and its ``[tracker]`` mapping
+dispatched on its ``type`` (:mod:`arrayproc.track.types`): ``type = "single"`` (the default;
+the papers' reproductions) runs the single-target bearings tracker of
+:mod:`arrayproc.track.single`; ``type = "multi"`` runs the track manager over every contact
+(:mod:`arrayproc.track.multi`); ``type = "delays"`` the recursive TDOA position tracker
+(:mod:`arrayproc.track.delays`). The older ``mode = "multi"`` (with ``measurements =
+"delays"`` for the TDOA tracker) still means the same. Each runner is a thin
+composition of the parts (models, filters, the hypothesis bank, the manager's associator,
+initiator, confirmer and deleter) that a user can also put together in Python; this module
+only dispatches, so neither runner imports the other's entry point (no import cycle).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError
-from arrayproc.track.delays import is_delays_config, load_delays_config, run_delays
-from arrayproc.track.multi import run_multi, split_config, tracker_mode
+from arrayproc.track.delays import check_delays_config, run_delays
+from arrayproc.track.multi import check_multi_config, run_multi
 from arrayproc.track.single import (  # noqa: F401  (re-exported for callers of the runner)
     _read_bearings,
     assign_by_continuity,
+    check_single_config,
     load_single_config,
     ownship_states,
     run_single,
     track_bearings,
 )
+from arrayproc.track.types import tracker_type
 
 
-def load_tracker_config(path: str) -> dict[str, Any]:
-    """Read and check a tracker TOML of either mode.
+def check_tracker_config(t: Any, path: str) -> dict[str, Any]:
+    """Check the ``[tracker]`` mapping of a tracker TOML of any mode.
 
     Parameters
     ----------
+    t : dict
+        The parsed ``[tracker]`` table.
     path : str
-        Tracker TOML (docs/formats.md).
+        The file it came from (for messages).
 
     Returns
     -------
@@ -43,42 +53,65 @@ def load_tracker_config(path: str) -> dict[str, Any]:
     ConfigError
         Naming the file and the key.
     """
-    mode = tracker_mode(path)
-    if mode == "multi" and is_delays_config(path):  # the TDOA tracker (track/delays.py)
-        return load_delays_config(path)
-    if mode == "multi":  # the multi-target keys, then the TMA filter's
-        multi, tma = split_config(path)
-        return {**tma, "mode": "multi", "multi": multi}
-    return load_single_config(path)
+    kind = tracker_type(t, path)
+    if kind == "delays":  # the TDOA tracker (track/delays)
+        return {**check_delays_config(t, path), "type": kind}
+    if kind == "multi":  # the multi-target keys, then the TMA filter's
+        multi, tma = check_multi_config(t, path)
+        return {**tma, "mode": "multi", "multi": multi, "type": kind}
+    if kind != "single":
+        raise ConfigError(f"{path}: tracker.mode must be 'single' or 'multi', not {kind!r} "
+                          "(or name the tracker with tracker.type = 'single', 'multi' or "
+                          "'delays')")
+    return check_single_config(t, path)
+
+
+def load_tracker_config(path: str) -> dict[str, Any]:
+    """Read (once) and check a tracker TOML of any mode (:func:`check_tracker_config`).
+
+    Parameters
+    ----------
+    path : str
+        Tracker TOML (docs/formats.md).
+
+    Returns
+    -------
+    dict
+        The checked settings.
+    """
+    doc, _ = read_toml(path, "tracker")
+    return check_tracker_config(doc.get("tracker"), path)
 
 
 def run_tracker(products_path: str, config_path: str, out_path: str,
-                progress: bool = False) -> None:
+                progress: bool = False, cfg: dict[str, Any] | None = None) -> None:
     """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5``.
 
     Parameters
     ----------
     products_path : str
-        Products file with ``bearings`` (or ``contacts``, ``positions``) rows.
+        Products file with ``bearings`` (or ``contacts``, ``positions``, ``delays``) rows.
     config_path : str
         Tracker TOML.
     out_path : str
         Tracks file to write (atomically).
     progress : bool
         Show a progress bar on stderr.
+    cfg : dict, optional
+        :func:`load_tracker_config` of ``config_path`` when the caller has it already (the
+        file is then not read again).
 
     Returns
     -------
     None
     """
-    mode = tracker_mode(config_path)
-    if mode == "multi" and is_delays_config(config_path):  # delays rows (track/delays.py)
-        run_delays(products_path, config_path, out_path, progress=progress)
-        return
-    if mode == "multi":  # every target (arrayproc.track.multi)
-        run_multi(products_path, config_path, out_path, progress=progress)
-        return
-    if mode != "single":
-        raise ConfigError(f"{config_path}: tracker.mode must be 'single' or 'multi', not "
-                          f"{mode!r}")
-    run_single(products_path, config_path, out_path, progress=progress)
+    if cfg is None:
+        cfg = load_tracker_config(config_path)
+    if cfg.get("mode") == "multi" and cfg["multi"]["measurements"] == "delays":
+        run_delays(products_path, config_path, out_path, progress=progress, cfg=cfg)
+    elif cfg.get("mode") == "multi":  # every target (arrayproc.track.multi)
+        tma = {k: v for k, v in cfg.items() if k not in ("mode", "multi")}
+        run_multi(products_path, config_path, out_path, progress=progress,
+                  checked=(cfg["multi"], tma))
+    else:
+        run_single(products_path, config_path, out_path, progress=progress, cfg=cfg)

@@ -50,12 +50,13 @@ import math
 import os
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from arrayproc.config import read_toml, resolve_beside
+from arrayproc.config import Param, Schema, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.angles import wrap_pi
 from arrayproc.geo.nav import Nav
@@ -69,66 +70,84 @@ from arrayproc.track.models.bearing import Bearing
 from arrayproc.track.models.level_bearing import LevelBearing
 from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 from arrayproc.track.state import Context
-
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
+from arrayproc.track.types import legacy_table
 
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
-_KEYS = {"mode", "filter", "lr", "side", "model", "sigma_bearing_deg", "q1", "q2", "bearings",
-         "nav", "params", "cone_gate", "level", *_PRIOR_KEYS}
+
+
+def _at_least(lo: float, strict: bool = False) -> Callable[[Any], str | None]:
+    def check(v: Any) -> str | None:
+        return None if (v > lo if strict else v >= lo) else \
+            f"must be a positive number, got {v}"
+    return check
+
+
+def _gate(v: Any) -> str | None:
+    return None if 0 <= v[0] < v[1] <= 180 else \
+        "must be [lo, hi] cone angles, deg, 0 <= lo < hi <= 180"
+
+
+#: the ``[tracker]`` keys of the single-target tracker (and of the TMA filter of each
+#: multi-target bearing track)
+SINGLE_PARAMS = Schema({
+    "mode": Param("str", None, "older form of type = \"single\"", choices=("single",)),
+    "filter": Param("str", "ukf", "the filter", choices=tuple(FILTERS)),
+    "lr": Param("bool", True, "left-right resolution: two hypotheses on the port/starboard "
+                "pair"),
+    "side": Param("str", None, "with lr = false: the bearing column to track",
+                  choices=("port", "starboard")),
+    "model": Param("str", "cv", "motion model: cv or ct (constant turn, unknown rate)"),
+    "sigma_bearing_deg": Param("float", 1.5, "bearing noise σ", check=_at_least(0, True),
+                               unit="deg"),
+    "q1": Param("float", Q1_PAPER, "acceleration noise intensity (L-R paper eq. 4)",
+                check=_at_least(0), unit="m²/s³"),
+    "q2": Param("float", Q2_PAPER, "turn-rate noise intensity (eq. 6)", check=_at_least(0),
+                unit="rad²/s³"),
+    "bearings": Param("str", None, "the products group (default: the only bearings group)"),
+    "nav": Param("str", None, "recording with /nav (default: the products' source)"),
+    "params": Param("table", {}, "the filter's parameters"),
+    "cone_gate": Param("band", None, "only bearing rows with cone angles in [lo, hi]",
+                       check=_gate, unit="deg"),
+    "level": Param("str", None, "rpf only: received levels from this bearings column, e.g. "
+                   "'spl_db'"),
+    "range_m": Param("float", None, "initial range prior", check=_at_least(0, True),
+                     unit="m"),
+    "sigma_range_m": Param("float", None, "σ of the range prior", check=_at_least(0),
+                           unit="m"),
+    "speed_mps": Param("float", None, "initial speed prior", check=_at_least(0), unit="m/s"),
+    "sigma_speed_mps": Param("float", None, "σ of the speed prior", check=_at_least(0),
+                             unit="m/s"),
+    "sigma_course_deg": Param("float", None, "σ of the course prior", check=_at_least(0),
+                              unit="deg"),
+    "sigma_turn_deg_s": Param("float", None, "ct: σ of the turn-rate prior",
+                              check=_at_least(0), unit="deg/s"),
+}, "the single-target bearings tracker ([tracker] table)")
+_KEYS = set(SINGLE_PARAMS)
 
 
 def load_single_config(path: str) -> dict[str, Any]:
-    """Read and check a single-target tracker TOML; ConfigError naming the file and key."""
+    """Read (once) and check a single-target tracker TOML: :func:`check_single_config` of its
+    ``[tracker]`` table."""
     doc, _ = read_toml(path, "tracker")
-    if "tracker" not in doc or not isinstance(doc["tracker"], dict):
+    return check_single_config(doc.get("tracker"), path)
+
+
+def check_single_config(t: Any, path: str) -> dict[str, Any]:
+    """Check the ``[tracker]`` mapping of a single-target tracker (module doc) and fill in the
+    defaults; ConfigError naming the file ``path`` and the key."""
+    t = legacy_table(t, path)
+    if not isinstance(t, dict):
         raise ConfigError(f"{path}: missing [tracker] table")
-    cfg = dict(doc["tracker"])
-    for k in cfg:
-        if k not in _KEYS:
-            raise ConfigError(f"{path}: unknown key tracker.{k}")
-    cfg.setdefault("filter", "ukf")
-    cfg.setdefault("lr", True)
-    cfg.setdefault("model", "cv")
-    cfg.setdefault("sigma_bearing_deg", 1.5)
-    cfg.setdefault("q1", Q1_PAPER)
-    cfg.setdefault("q2", Q2_PAPER)
-    cfg.setdefault("params", {})
-    for k in ("filter", "model", "side", "nav", "bearings", "mode"):
-        if k in cfg and not isinstance(cfg[k], str):
-            raise ConfigError(f"{path}: tracker.{k} must be a string, got {cfg[k]!r}")
-    if cfg["filter"] not in FILTERS:
-        raise ConfigError(f"{path}: tracker.filter must be one of {', '.join(FILTERS)}, "
-                          f"not {cfg['filter']!r}")
-    if not isinstance(cfg["lr"], bool):
-        raise ConfigError(f"{path}: tracker.lr must be true or false")
+    checked = SINGLE_PARAMS.check(t, path, prefix="tracker.")
+    # keys without a default stay absent when not given (the runners ask `"side" in cfg`)
+    cfg = {k: v for k, v in checked.items() if k in t or SINGLE_PARAMS[k].default is not None}
+    cfg["params"] = dict(cfg["params"])
     if not cfg["lr"] and cfg.get("side") not in ("port", "starboard"):
         raise ConfigError(f"{path}: tracker.side must be 'port' or 'starboard' when lr = false")
-    if not isinstance(cfg["params"], dict):
-        raise ConfigError(f"{path}: tracker.params must be a table")
-    if "level" in cfg:
-        if not isinstance(cfg["level"], str):
-            raise ConfigError(f"{path}: tracker.level must name a bearings column, e.g. "
-                              "'spl_db'")
-        if cfg["filter"] == "srf":
-            raise ConfigError(f"{path}: tracker.level needs a filter that takes any "
-                              "measurement model (the srf is bearings-only)")
-    if "cone_gate" in cfg:
-        g = cfg["cone_gate"]
-        if (not isinstance(g, list) or len(g) != 2
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in g)
-                or not 0 <= g[0] < g[1] <= 180):
-            raise ConfigError(f"{path}: tracker.cone_gate must be [lo, hi] cone angles, deg, "
-                              "0 <= lo < hi <= 180")
-    for k in ("sigma_bearing_deg", "q1", "q2", *_PRIOR_KEYS):
-        if k in cfg:
-            v = cfg[k]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-                    or v < 0 or (k in ("sigma_bearing_deg", "range_m") and v == 0):
-                raise ConfigError(f"{path}: tracker.{k} must be a positive number")
+    if "level" in cfg and cfg["filter"] == "srf":
+        raise ConfigError(f"{path}: tracker.level needs a filter that takes any "
+                          "measurement model (the srf is bearings-only)")
     return cfg
 
 
@@ -154,7 +173,7 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
     if level is not None and level not in g:
         raise FormatError(f"{products_path}: bearings column {level!r} (tracker.level) is "
                           "missing")
-    names = ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db")
+    names = ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db", "level_db", "side")
     cols = {k: np.asarray(g[k], float).reshape(-1) for k in
             names + ((level,) if level and level not in names else ()) if k in g}
     if any(v.shape != t.shape for v in cols.values()):
@@ -350,12 +369,14 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
 
 
 def run_single(products_path: str, config_path: str, out_path: str,
-               progress: bool = False) -> None:
-    """``arrayproc track`` with a single-target tracker (see the module doc)."""
+               progress: bool = False, cfg: dict[str, Any] | None = None) -> None:
+    """``arrayproc track`` with a single-target tracker (see the module doc); ``cfg`` the
+    checked configuration when the caller has read the file already."""
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.units import PASCAL, file_units, level_label
 
-    cfg = load_single_config(config_path)
+    if cfg is None:
+        cfg = load_single_config(config_path)
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
@@ -383,7 +404,10 @@ def run_single(products_path: str, config_path: str, out_path: str,
     own, hd = ownship_states(_read_nav(rec), t)
     port = np.deg2rad(b["bearing_port_deg"])
     stbd = np.deg2rad(b["bearing_stbd_deg"])
-    if cfg["lr"]:
+    side = b.get("side")
+    if side is not None and np.all(np.abs(side) == 1.0):
+        zs = stbd[:, None]  # resolved by port/starboard beams: the one true bearing per row
+    elif cfg["lr"]:
         zs = assign_by_continuity(port, stbd)
     else:
         zs = (port if cfg["side"] == "port" else stbd)[:, None]
@@ -410,5 +434,5 @@ def run_single(products_path: str, config_path: str, out_path: str,
                  cov=Ps[sl, :4, :4], own_x=own[sl, 0], own_y=own[sl, 1])
 
 
-__all__ = ["run_single", "load_single_config", "track_bearings", "build_components",
-           "ownship_states", "assign_by_continuity"]
+__all__ = ["run_single", "load_single_config", "check_single_config", "track_bearings",
+           "build_components", "ownship_states", "assign_by_continuity"]

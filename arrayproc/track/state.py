@@ -21,12 +21,19 @@ class Context:
     ``own`` is the observer state [x, y, ẋ, ẏ] (m, m/s) at the measurement time, ``own_prev``
     at the previous time (motion models use both, L-R paper eqs. (1)-(3)); ``heading`` the array
     heading (rad, clockwise from north; mirrored bearings, L-R paper eq. (8)); ``t`` the time (s).
+    ``meas_cov`` and ``q_scale`` are the scan's measurement covariances and process-noise
+    multiplier for the stacked (multi-target) filters.
     """
 
     own: np.ndarray
     own_prev: np.ndarray | None = None
     heading: float = 0.0
     t: float = 0.0
+    #: per-measurement noise covariances (m, k, k) of a scan whose rows carry their own
+    #: (the ``cov`` column of ``positions``), read by the models that need them
+    meas_cov: np.ndarray | None = None
+    #: multiplier of the process noise Q over this step (e.g. larger during ownship turns)
+    q_scale: float = 1.0
 
     def __post_init__(self) -> None:
         self.own = np.ascontiguousarray(self.own, dtype=float)

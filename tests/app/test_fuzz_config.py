@@ -39,10 +39,11 @@ SLOW = settings(max_examples=3000, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 STAGE_TYPES = ["power", "pass", "cbf", "integrate", "btr", "lofar", "bearings", "dft_filter",
-               "ibf", "etam", "psas", "tde", "x", ""]
+               "ibf", "etam", "psas", "tde", "mvdr", "music", "lr_cbf", "x", ""]
 CHAIN_KEYS = ["type", "name", "input", "band", "ref", "nfft", "hop", "beams", "window",
               "snapshots", "mode", "batch", "threads", "decimate", "taper", "complex",
-              "normalise", "count", "shading", "threshold_db", "lines"]
+              "normalise", "count", "shading", "threshold_db", "lines", "loading", "wng_db",
+              "sources", "smoothing", "weights", "peak_widths"]
 
 scalars = st.one_of(
     st.integers(-10**12, 10**12), st.floats(allow_nan=True, allow_infinity=True),

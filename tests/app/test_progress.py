@@ -19,13 +19,14 @@ from arrayproc.app.progress import (
     audio_seconds,
     format_ratio,
     format_seconds,
+    peak_memory_mb,
     summary_line,
 )
 from arrayproc.io.geometry import line_array
 from tests.conftest import chain_toml, write_recording
 
 LINE = re.compile(r"^arrayproc: wrote (?P<out>\S+) \((?P<what>[^)]*)\) in (?P<t>[\d.]+) s"
-                  r"(?:, (?P<x>[\d.e+-]+)x real time)?$")
+                  r"(?:, (?P<x>[\d.e+-]+)x real time)?, peak (?P<mb>\d+) MB$")
 
 SCENARIO = """[recording]
 fs = 1024.0
@@ -140,6 +141,14 @@ def test_formats():
     assert format_ratio(125.4) == "125x"
     assert summary_line("a.h5", "3 groups", 2.4, 300.0) == \
         "arrayproc: wrote a.h5 (3 groups) in 2.4 s, 125x real time"
+    assert summary_line("a.h5", "3 groups", 2.4, 300.0, 412.4) == \
+        "arrayproc: wrote a.h5 (3 groups) in 2.4 s, 125x real time, peak 412 MB"
+
+
+def test_peak_memory_is_this_process_high_water_mark():
+    import resource
+    mb = peak_memory_mb()
+    assert mb >= resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0 > 0
 
 
 def test_summary_times_from_the_given_start():

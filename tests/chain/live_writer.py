@@ -4,7 +4,9 @@ every flush. Run as ``python live_writer.py OUT.h5 LOG SECONDS CHUNK_S PAUSE_S [
 [WAIT_FOR]]``; prints ``ready`` once the file can be opened by a follower. ``HOLD_S``: keep
 the file open that long after the last append (a recorder that went quiet). ``WAIT_FOR``: a
 products file; after the first second of samples the writer waits until that file holds
-rows (the follower is up and running) before it goes on."""
+rows (the follower is up and running) before it goes on. An eighth argument ``nav``: the
+array moves (east at 2 m/s, turning at 3 deg/s) and ``/nav`` grows with the samples, one row
+at the end of each chunk."""
 
 from __future__ import annotations
 
@@ -32,6 +34,16 @@ def samples(seconds: float, seed: int = 3) -> np.ndarray:
     return x.astype(np.float32)
 
 
+def grow_nav(g, t: float) -> None:
+    """Append the track's row at time t (s) to the ``/nav`` datasets."""
+    n = g["time"].shape[0]
+    for k in ("time", "position", "heading"):
+        g[k].resize(n + 1, axis=0)
+    g["time"][n] = t
+    g["position"][n] = (2.0 * t, 0.0)
+    g["heading"][n] = (90.0 + 3.0 * t) % 360.0
+
+
 def has_rows(path: str) -> bool:
     """Whether a products file being written live holds any rows yet."""
     found = []
@@ -47,17 +59,26 @@ def has_rows(path: str) -> bool:
 def main() -> None:
     out, log, seconds, chunk_s, pause_s = sys.argv[1:6]
     hold = float(sys.argv[6]) if len(sys.argv) > 6 else 0.0
-    wait_for = sys.argv[7] if len(sys.argv) > 7 else None
+    wait_for = sys.argv[7] if len(sys.argv) > 7 and sys.argv[7] != "-" else None
+    nav = len(sys.argv) > 8 and sys.argv[8] == "nav"
     x = samples(float(seconds))
     pos = np.zeros((N_CH, 3))
     pos[:, 0] = -np.arange(N_CH) * 0.5
     step = int(float(chunk_s) * FS)
     times = []
     with RecordingWriter(out, FS, N_CH, positions=pos, live=True, chunk_samples=256) as w:
+        if nav:
+            track = w._f.create_group("nav")
+            for k, shape in (("time", ()), ("position", (2,)), ("heading", ())):
+                track.create_dataset(k, shape=(0,) + shape, maxshape=(None,) + shape,
+                                     dtype=float, chunks=(64,) + shape)
+            grow_nav(track, 0.0)
         w.flush()
         print("ready", flush=True)
         for a in range(0, x.shape[0], step):
             w.append(x[a:a + step])
+            if nav:
+                grow_nav(track, min(a + step, x.shape[0]) / FS)
             w.flush()
             times.append([int(min(a + step, x.shape[0])), time.time()])
             if wait_for and a < FS <= a + step:

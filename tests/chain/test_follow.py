@@ -37,12 +37,13 @@ def _chain(tmp_path: Path) -> Path:
     return c
 
 
-def _writer(tmp_path: Path, seconds: float, hold: float = 0.0) -> tuple[subprocess.Popen, Path]:
+def _writer(tmp_path: Path, seconds: float, hold: float = 0.0,
+            nav: bool = False) -> tuple[subprocess.Popen, Path]:
     """The recorder, at twice real time once the follower's first rows are on disk."""
     rec, log = tmp_path / "rec.h5", tmp_path / "writer.json"
     w = subprocess.Popen([sys.executable, str(WRITER), str(rec), str(log), str(seconds), "0.2",
-                          "0.1", str(hold), str(tmp_path / "live.h5")], stdout=subprocess.PIPE,
-                         text=True, env=ENV, cwd=REPO)
+                          "0.1", str(hold), str(tmp_path / "live.h5")] + (["nav"] if nav else []),
+                         stdout=subprocess.PIPE, text=True, env=ENV, cwd=REPO)
     assert w.stdout.readline().strip() == "ready"
     return w, rec
 
@@ -95,6 +96,33 @@ def test_follow_equals_whole_file_run(tmp_path):
     assert "median" in latency_line(st)
 
 
+def test_follow_with_a_growing_track(tmp_path, monkeypatch):
+    """/nav grows with the samples: the follower re-reads it, every block waits until the
+    track reaches the block's end, and the products equal the whole-file run's."""
+    chain = _chain(tmp_path)
+    w, rec = _writer(tmp_path, 10.0, nav=True)
+    import arrayproc.chain.follow as FO
+    ahead = []
+    orig = FO.follow_blocks
+
+    def spy(recording, *a, **k):
+        for blk in orig(recording, *a, **k):
+            ahead.append((recording.nav_end(), blk.t0 + blk.span, recording.growing))
+            yield blk
+    monkeypatch.setattr(FO, "follow_blocks", spy)
+    live = tmp_path / "live.h5"
+    process(str(rec), str(chain), str(live), follow=True, idle_s=3.0)
+    assert w.wait(60) == 0
+    whole = tmp_path / "whole.h5"
+    process(str(rec), str(chain), str(whole))
+    assert _same_products(live, whole) == 7
+    nav_end, block_end, growing = (np.array(v) for v in zip(*ahead))
+    assert np.all(nav_end[growing] >= block_end[growing] - 1e-9)
+    assert np.unique(nav_end).size > 5          # the track was re-read as it grew
+    with Recording(rec) as r:
+        assert r.nav.time.size == 51 and r.nav_end() == pytest.approx(10.0)
+
+
 def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
     chain = _chain(tmp_path)
     w, rec = _writer(tmp_path, 8.0, hold=6.0)   # the recorder goes quiet but keeps the file
@@ -129,16 +157,18 @@ def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
     assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
 
 
-@pytest.mark.parametrize("idle", ["0", "-1", "nan"])
-def test_follow_refuses_bad_idle(tmp_path, idle):
+@pytest.mark.parametrize("args", [["--follow", "--idle", "0"], ["--follow", "--idle", "-1"],
+                                  ["--follow", "--idle", "nan"], ["--idle", "5"]])
+def test_follow_refuses_bad_idle(tmp_path, args):
     chain = _chain(tmp_path)
     rec = tmp_path / "r.h5"
     from tests.conftest import write_recording
     write_recording(rec, np.zeros((2000, 8), np.float32))
     p = subprocess.run([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
-                        str(chain), "-o", str(tmp_path / "o.h5"), "--follow", "--idle", idle],
+                        str(chain), "-o", str(tmp_path / "o.h5"), *args],
                        capture_output=True, text=True, env=ENV, cwd=REPO)
     assert p.returncode == 2 and p.stderr.startswith("arrayproc: error: --idle")
+    assert len(p.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "o.h5").exists()
 
 

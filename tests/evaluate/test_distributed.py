@@ -3,46 +3,21 @@ and over 2 workers gives the same numbers, bit for bit."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from arrayproc.evaluate.distributed import chunk_seeds, solver_seeds, spread, tma_chunk
+from arrayproc.evaluate.distributed import chunk_seeds, spread
+from arrayproc.evaluate.scenarios.thesis_tma import fig_3_19, solver_seeds, tma_chunk
 
 distributed = pytest.importorskip("distributed")
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "reproduce_batch_tma.py"
 
-
-@pytest.fixture(scope="module")
-def script():
-    spec = importlib.util.spec_from_file_location("reproduce_batch_tma", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-@pytest.fixture(scope="module")
-def clients():
-    from arrayproc.app.batch import start_client
-    out = {}
-    for n in (1, 2):
-        out[n] = start_client(workers=n, threads=1)
-        out[n][0].wait_for_workers(n)
-    yield {n: c for n, (c, _) in out.items()}
-    for c, cluster in out.values():
-        c.close()
-        cluster.close()
-
-
-def test_batch_tma_same_numbers_on_one_and_two_workers(script, clients):
+def test_batch_tma_same_numbers_on_one_and_two_workers(clients):
     """4 runs in chunks of 2 (seeded from SeedSequence(3)): every run's BO- and TD-TMA errors
     and the table's statistics are the same bytes on 1 and on 2 workers; the chunks draw
     different errors."""
-    one = script.run(4, 3, clients[1], chunk=2)
-    two = script.run(4, 3, clients[2], chunk=2)
+    one = fig_3_19(4, 3, clients[1], chunk=2)
+    two = fig_3_19(4, 3, clients[2], chunk=2)
     for m in ("bearings", "delays"):
         e1, e2 = np.array(one[m]["errors"]), np.array(two[m]["errors"])
         assert e1.shape == (4, 4) and e1.tobytes() == e2.tobytes(), m

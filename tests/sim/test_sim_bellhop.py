@@ -52,7 +52,20 @@ def test_arrivals_mode_against_bellhop_coherent_tl_at_5_ranges():
 
 
 def test_bellhop_keys_are_checked():
-    with pytest.raises(ConfigError, match="bellhop"):
-        parse_scenario(dict(scenario([100.0]), propagation={"multipath": "bellhop"}))
+    # without [propagation.bellhop]: the bundled TL tables' Munk environment, the loudest
+    # tonal's frequency, the range from the geometry (resolved by the simulator)
+    spec = parse_scenario(dict(scenario([100.0]), propagation={"multipath": "bellhop"}))
+    bh = spec.propagation.bellhop
+    assert bh.depth == 1000.0 and bh.ssp.shape == (7, 2) and bh.freq == F
+    assert bh.max_range is None
     with pytest.raises(ConfigError, match="ssp"):
         parse_scenario(scenario([100.0], {"ssp": [[0.0, 1500.0], [50.0, 1490.0]]}))
+    with pytest.raises(ConfigError, match="bottom depth"):
+        d = scenario([100.0])
+        d["propagation"]["bellhop"] = {"ssp": [[0.0, 1500.0], [100.0, 1490.0]]}
+        parse_scenario(d)
+    with pytest.raises(ConfigError, match="passive sources only"):
+        d = scenario([100.0])
+        d["active"] = {"waveform": "cw", "fc": 500.0, "duration": 0.1, "level_db": 200.0,
+                       "interval": 10.0}
+        parse_scenario(d)

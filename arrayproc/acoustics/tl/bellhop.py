@@ -173,25 +173,8 @@ def run_bellhop(env: BellhopEnv | None = None, executable: str = "bellhopcxx",
     """
     env = env or BellhopEnv()
     exe = find_executable(executable) if os.sep not in executable else executable
-    is_cxx = "cxx" in Path(exe).name or "cuda" in Path(exe).name
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
-        tmpp = Path(tmp)
-        write_env(env, tmpp / "run.env")
-        cmd = [exe, "-2", "-1", "run"] if is_cxx else [exe, "run"]
-        envvars = dict(os.environ)
-        if not is_cxx:
-            gdir = _gfortran_dir(tmpp)
-            if gdir:
-                envvars["LD_LIBRARY_PATH"] = gdir + os.pathsep + envvars.get("LD_LIBRARY_PATH", "")
-        proc = subprocess.run(cmd, cwd=tmpp, env=envvars, capture_output=True, text=True,
-                              timeout=timeout_s, check=False)
-        shd = tmpp / "run.shd"
-        if proc.returncode != 0 or not shd.exists():
-            prt = (tmpp / "run.prt").read_text(errors="replace")[-2000:] if (
-                tmpp / "run.prt").exists() else ""
-            raise ArrayprocError(f"{exe} failed (status {proc.returncode}): "
-                                 f"{proc.stderr.strip()[-500:]} {prt}")
-        s = read_shd(shd)
+        s = read_shd(_run(env, exe, Path(tmp), timeout_s, "run.shd"))
     tl = np.stack([s.tl(0, 0, i) for i in range(s.src_depths.size)])
     tl = np.minimum(tl, 300.0)   # shadow zones (p = 0) capped at 300 dB
     attrs = {"model": Path(exe).name, "freq_hz": env.freq_hz, "run_type": env.run_type,

@@ -183,6 +183,24 @@ def _prefix4(p: np.ndarray, d0: int, out: np.ndarray) -> None:  # pragma: no cov
 
 
 @njit(cache=True, nogil=True)
+def _column_prefix(p: np.ndarray, fa: int, fb: int, ga: int, gb: int, colf: np.ndarray,
+                   colg: np.ndarray, ff: np.ndarray, gg: np.ndarray) -> None:  # pragma: no cover
+    """2-D CFAR: per column the sums of rows [fa, fb) (window) and [ga, gb) (guard), and
+    their prefix sums along range."""
+    for r in range(p.shape[1]):
+        sf = 0.0
+        for i in range(fa, fb):
+            sf += p[i, r]
+        sg = 0.0
+        for i in range(ga, gb):
+            sg += p[i, r]
+        colf[r] = sf
+        colg[r] = sg
+    _prefix(colf, ff)
+    _prefix(colg, gg)
+
+
+@njit(cache=True, nogil=True)
 def _kth(buf: np.ndarray, n: int, k: int) -> float:  # pragma: no cover - numba
     """k-th smallest (1-based) of buf[:n] (partial selection sort of a copy)."""
     a = buf[:n].copy()
@@ -235,17 +253,7 @@ def cfar_plane(p: np.ndarray, gd: int, td: int, gr: int, tr: int, mode: int,
         elif mode != MODE_OS:
             ff = ff0
             gg = gg0
-            for r in range(nr):
-                sf = 0.0
-                for i in range(fa, fb):
-                    sf += p[i, r]
-                sg = 0.0
-                for i in range(ga, gb):
-                    sg += p[i, r]
-                colf[r] = sf
-                colg[r] = sg
-            _prefix(colf, ff)
-            _prefix(colg, gg)
+            _column_prefix(p, fa, fb, ga, gb, colf, colg, ff, gg)
         fast = mode != MODE_OS and wd == 0 and gd == 0
         ia, ib = r0, r0  # interior handled by the fast path: none unless fast
         if fast:  # interior columns by the constant-N fast path, edges below

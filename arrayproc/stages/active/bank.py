@@ -162,7 +162,7 @@ def band_plan(fs: float, n_samples: int, band: tuple[float, float]) -> BandPlan:
 
 
 def replica_spectra(replica: np.ndarray, fs: float, f0: float, df: float, n: int,
-                    scales: np.ndarray) -> np.ndarray:
+                    scales: np.ndarray, map_fn=map) -> np.ndarray:
     """Conjugate spectra of the Doppler-scaled replicas p(d t) at f0 + j df, j = 0 ... n-1.
 
     Parameters
@@ -177,6 +177,9 @@ def replica_spectra(replica: np.ndarray, fs: float, f0: float, df: float, n: int
         Number of frequencies.
     scales : (D,) ndarray
         Doppler time scales d (eq. (4.8)).
+    map_fn : callable
+        ``map``-like, to spread the channels over threads (each channel is computed alone,
+        so the result does not depend on it).
 
     Returns
     -------
@@ -184,18 +187,22 @@ def replica_spectra(replica: np.ndarray, fs: float, f0: float, df: float, n: int
         conj(P(f/d)/d), each row scaled to unit energy.
     """
     x = np.asarray(replica, float)
-    out = np.empty((len(scales), n), np.complex64)
-    for i, d in enumerate(np.asarray(scales, float)):
+    sc = np.asarray(scales, float)
+    top = (f0 + (n - 1) * df) / sc
+    if np.any(top >= fs / 2):
+        raise ConfigError(f"replica: Doppler-scaled band reaches {top.max():g} Hz above fs/2")
+    out = np.empty((sc.size, n), np.complex64)
+
+    def one(i: int) -> None:
+        d = sc[i]
         lo = f0 / d
-        hi = (f0 + (n - 1) * df) / d
-        if hi >= fs / 2:
-            raise ConfigError(f"replica: Doppler-scaled band reaches {hi:g} Hz above fs/2")
         if n > 1:
-            s = zoom_fft(x, [lo, hi], m=n, fs=fs, endpoint=True)
+            s = zoom_fft(x, [lo, top[i]], m=n, fs=fs, endpoint=True)
         else:
             s = np.array([np.sum(x * np.exp(-2j * np.pi * lo * np.arange(x.size) / fs))])
         s = np.conj(s) / d
         out[i] = s / np.sqrt(np.sum(np.abs(s) ** 2))
+    list(map_fn(one, range(sc.size)))
     return out
 
 

@@ -80,14 +80,15 @@ class Cfar(Stage):
         "guard": Param("any", [4, 0], "guard cells each side: range, or [range, doppler]"),
         "train": Param("any", [16, 0], "training cells each side: range, or [range, doppler]"),
         "os_quantile": Param("float", 0.75, "OS rank k = round(q N)"),
-        "min_range_m": Param("float", 100.0, "contacts nearer than this are dropped, m"),
+        "min_range_m": Param("float", 100.0, "contacts nearer than this are dropped, m", unit="m"),
         "moving_threshold": Param("float", 2.0, "|absolute Doppler| above which a contact is "
-                                  "moving, knots"),
-        "merge_range_m": Param("float", 0.0, "merge gate in range, m (0: 4 range cells c/(2B))"),
+                                  "moving, knots", unit="kn"),
+        "merge_range_m": Param("float", 0.0, "merge gate in range, m (0: 4 range cells c/(2B))",
+                               unit="m"),
         "merge_rate_mps": Param("float", 0.0, "range rates closer than this are one echo's, "
-                                "m/s (0: 4 steps of the bank's range-rate grid)"),
+                                "m/s (0: 4 steps of the bank's range-rate grid)", unit="m/s"),
         "merge_cone_deg": Param("float", 180.0, "merge gate in cone angle, deg (180: any "
-                                "beam, which also folds grating and side lobes)"),
+                                "beam, which also folds grating and side lobes)", unit="deg"),
         "threads": Param("int", 0, "threads over the beams of a block (0: all cores)"),
     }
 

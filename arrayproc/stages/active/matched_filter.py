@@ -55,11 +55,12 @@ class MatchedFilter(Stage):
     produces = Domain.RANGE_DOPPLER
     params = {
         "range_rate": Param("table", {}, "range-rate channels {min, max, step}, m/s (default "
-                            "+-15 m/s at the waveform's 3 dB Doppler resolution)"),
+                            "+-15 m/s at the waveform's 3 dB Doppler resolution)", unit="m/s"),
         "chunk": Param("int", 8, "beams per output block at most", check=positive),
         "block_mb": Param("float", 96.0, "largest output block, MB: fewer beams per block "
-                          "when chunk beams would exceed it (at least one per thread)"),
-        "max_range_m": Param("float", 0.0, "longest range kept, m (0: the whole window)"),
+                          "when chunk beams would exceed it (at least one per thread)",
+                          unit="MB"),
+        "max_range_m": Param("float", 0.0, "longest range kept, m (0: the whole window)", unit="m"),
         "bracket": Param("table", None, "{source, range_m, cone_deg}: bracket mode"),
         "range_doppler": Param("table", None, "{pings, cones, range_m}: write range_doppler"),
         "threads": Param("int", 0, "FFT threads (0: all cores)"),
@@ -133,7 +134,8 @@ class MatchedFilter(Stage):
                                      cm.insensitive(wf.kind))
             except ConfigError as e:
                 raise ConfigError(f"stage {self.name!r}: {e}") from None
-            bank = replica_spectra(wf.samples, wf.fs, f0, df, n, doppler_scale(rr, c))
+            bank = replica_spectra(wf.samples, wf.fs, f0, df, n, doppler_scale(rr, c),
+                                   map_fn=lambda f, items: self._map(f, list(items)))
             self._banks[key] = (rr, bank)
         return self._banks[key]
 

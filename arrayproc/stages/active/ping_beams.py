@@ -41,6 +41,8 @@ from . import _common as cm
 from .bank import band_plan
 from .beamform import beam_axis, beam_series, element_advances
 
+_UNKNOWN = 1 << 62  # a window whose end is not known yet (a recording still growing)
+
 
 @register
 class ActiveBeams(Stage):
@@ -51,18 +53,19 @@ class ActiveBeams(Stage):
     produces = Domain.BEAM_TIME
     params = {
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+                       "cone angles {start, stop, count} or {bearings, elevations}, deg",
+                       unit="deg"),
         "window_s": Param("float", 0.0, "receive window after each transmission, s (0: up to "
-                          "the next transmission)"),
+                          "the next transmission)", unit="s"),
         "band": Param("band", None, "[lo, hi] Hz kept as complex baseband (default: the "
-                      "waveform's main lobe widened by the Doppler of +-15 m/s)"),
+                      "waveform's main lobe widened by the Doppler of +-15 m/s)", unit="Hz"),
         "shading": Param("str", "hann", "array shading", choices=("none", "hann", "hamming")),
         "threads": Param("int", 0, "FFT and beamforming threads (0: all cores)"),
         "blank_direct": Param("any", False, "zero each element's samples during the direct "
                               "arrival of the ping (projector offset from /active): true, "
                               "false, or a list of waveform names or kinds, e.g. [\"bpsk\"]"),
         "blank_margin_s": Param("float", 0.02, "extra time blanked before and after the "
-                                "direct arrival, s"),
+                                "direct arrival, s", unit="s"),
     }
 
     def validate(self) -> None:
@@ -82,21 +85,26 @@ class ActiveBeams(Stage):
     def _workers(self) -> int:
         return self.threads if self.threads > 0 else (os.cpu_count() or 1)
 
-    def _window(self, act, i: int, fs: float, n_total: int) -> tuple[int, int, int]:
-        """(first sample, samples to transform, complete lags) of ping i."""
+    def _window(self, act, i: int, fs: float, n_total: int | None) -> tuple[int, int, int]:
+        """(first sample, samples to transform, complete lags) of ping i; ``n_total`` None
+        while the recording still grows (``process --follow``): the window the schedule
+        gives, and for the last ping of a window up to the recording's end, none yet."""
         tp = float(act.time[i])
         wf = act.waveforms[act.waveform[i]]
+        s0 = int(round(tp * fs))
+        n_pulse = int(np.ceil(wf.duration * fs)) + 1
         if self.window_s > 0:
             span = self.window_s
         elif i + 1 < act.time.size:
             span = float(act.time[i + 1]) - tp
+        elif n_total is None:
+            return s0, _UNKNOWN, _UNKNOWN
         else:
             span = n_total / fs - tp
-        s0 = int(round(tp * fs))
-        n_pulse = int(np.ceil(wf.duration * fs)) + 1
         n_lag = max(1, int(round(span * fs)))
         # lags whose whole echo lies inside the recording
-        n_lag = max(1, min(n_lag, n_total - s0 - n_pulse))
+        if n_total is not None:
+            n_lag = max(1, min(n_lag, n_total - s0 - n_pulse))
         return s0, n_lag + n_pulse, n_lag
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -105,7 +113,10 @@ class ActiveBeams(Stage):
         act = cm.schedule(rec, where)
         c = self.ctx.sound_speed
         fs = rec.fs
-        n_total = rec.n_samples
+        # a recording still being written (process --follow) says so with ``growing``: the
+        # pings whose windows are complete go as they complete, the others when it stops
+        growing = bool(getattr(rec, "growing", False))
+        n_total = None if growing else rec.n_samples
         wins = [self._window(act, i, fs, n_total) for i in range(act.time.size)]
         self._blank_wf = blanked_waveforms(self._blank, act.waveforms, where,
                                            getattr(rec, "path", ""))
@@ -118,6 +129,9 @@ class ActiveBeams(Stage):
         nxt = 0  # next ping to emit
         positions = None
         for b in blocks:
+            if growing and not getattr(rec, "growing", False):  # its final length is known
+                growing, n_total = False, rec.n_samples
+                wins[nxt:] = [self._window(act, i, fs, n_total) for i in range(nxt, len(wins))]
             x = b.data[: b.meta.n_valid]
             s0 = int(b.meta.sample0)
             positions = b.positions
@@ -127,7 +141,7 @@ class ActiveBeams(Stage):
                 buf = np.concatenate([buf, x])
             end = buf_start + buf.shape[0]
             while nxt < len(wins) and (wins[nxt][0] + wins[nxt][1] <= end
-                                       or end >= n_total):
+                                       or (n_total is not None and end >= n_total)):
                 yield self._ping(act, nxt, wins[nxt], buf, buf_start, plans, positions, fs, c)
                 nxt += 1
             keep = wins[nxt][0] if nxt < len(wins) else end

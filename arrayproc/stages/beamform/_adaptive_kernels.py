@@ -73,7 +73,7 @@ def _sums(lam: np.ndarray, p: np.ndarray, delta: float) -> tuple[float, float, f
 @njit(cache=True, nogil=True)
 def wng_loading(lam: np.ndarray, p: np.ndarray, delta0: np.ndarray, wng_min: float,
                 output: bool, power: np.ndarray, delta: np.ndarray, wng: np.ndarray) -> None:
-    """MVDR with the white-noise-gain constraint (Cox, Zeskind & Owen 1987, eq. 30): per bin f
+    """MVDR with the white-noise-gain constraint (Cox, Zeskind & Owen 1987): per bin f
     and beam b the smallest loading δ ≥ ``delta0[f]`` whose weights w = (R + δI)⁻¹a / a^H(R +
     δI)⁻¹a reach WNG = |w^H a|²/‖w‖² = (Σ p/(λ+δ))² / Σ p/(λ+δ)² ≥ ``wng_min`` (linear), with
     λ (F, C) the eigenvalues of R and p (F, B, C) = |u_i^H a|². The WNG grows monotonically

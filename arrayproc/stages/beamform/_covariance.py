@@ -3,7 +3,7 @@
 
 Per bin f the sample covariance of ``K`` consecutive snapshots (the ``snapshots`` key),
 
-    R̂(f) = (1/K) Σ_k x_k(f) x_k(f)^H,                                   (Van Trees 7.8)
+    R̂(f) = (1/K) Σ_k x_k(f) x_k(f)^H,
 
 x_k the element DFTs of snapshot k (unnormalised, numpy sign convention, as :mod:`cbf`), so a
 plane wave of DFT amplitude s gives R̂ = |s|² a a^H with a_n = exp(+j2πf τ_n). Groups of K
@@ -53,16 +53,18 @@ def _circ_mean_deg(a: np.ndarray) -> float:
 def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nfft: int,
                       hop: int, window: str, band: tuple[float, float] | None,
                       threads: int = 1) -> Iterator[CovarianceGroup]:
-    """The sample covariance (Van Trees eq. 7.8) of every complete group of ``snapshots``
+    """The sample covariance of every complete group of ``snapshots``
     snapshots of the stage's input (time blocks, framed here, or element-spectra blocks).
 
-    The outer products accumulate per block (:func:`accumulate`); memory stays at one
-    (F, C, C) accumulator whatever the group length."""
+    A group's spectra are kept (K·F·C complex64, e.g. 25 MB for 64 snapshots of 761 bins and
+    64 channels) and multiplied out at once when it is complete (:func:`accumulate`), so the
+    result does not depend on how the input was cut into blocks (segmented runs equal whole
+    ones)."""
     rec = stage.ctx.recording
     nav = rec.nav if rec is not None else None
     framer = SpectraFramer(nfft, hop, window, band, nav)
-    acc: np.ndarray | None = None
-    n_in = 0  # snapshots in acc
+    buf: np.ndarray | None = None  # the group's spectra (K, F, C), filled row by row
+    n_in = 0  # snapshots in buf
     group, expected, valid = -1, 0, False
     times: list[float] = []
     heads: list[float] = []
@@ -81,37 +83,34 @@ def covariance_groups(stage: Stage, blocks: Iterator[Block], snapshots: int, nff
         count = int(ks[-1]) + 1
         geo = (spec.positions.tobytes(), spec.freqs.tobytes())
         if geo != key:
-            group, key = -1, geo  # geometry or bins changed: start afresh
+            group, key, buf = -1, geo, None  # geometry or bins changed: start afresh
         x = spec.data
-        i = 0
-        while i < x.shape[0]:
+        for i in range(x.shape[0]):
             k = int(ks[i])
             g = k // snapshots
             if g != group:
-                group, expected, valid, acc, n_in = g, g * snapshots, True, None, 0
+                group, expected, valid, n_in = g, g * snapshots, True, 0
                 times, heads = [], []
             if k != expected:
                 valid = False  # a snapshot of this group is missing: the group is dropped
-            # the rows of this block that continue the group without a gap
-            j = i + 1
-            while j < x.shape[0] and int(ks[j]) == int(ks[j - 1]) + 1 \
-                    and int(ks[j]) // snapshots == g:
-                j += 1
-            expected = int(ks[j - 1]) + 1
-            if valid:
-                if acc is None:
-                    acc = np.zeros((x.shape[1], x.shape[2], x.shape[2]), np.complex128)
-                    first_start = float(m.times[i]) - 0.5 * float(m.nfft) / spec.fs
-                accumulate(acc, x[i:j], threads)
-                n_in += j - i
-                times.extend(np.asarray(m.times[i:j], float))
-                heads.extend(np.asarray(m.headings[i:j], float))
-                if n_in == snapshots:
-                    span = times[-1] + 0.5 * float(m.nfft) / spec.fs - first_start
-                    yield CovarianceGroup(acc / snapshots, snapshots, float(np.mean(times)),
-                                          _circ_mean_deg(heads), first_start, span, spec)
-                    acc, valid = None, False
-            i = j
+            expected = k + 1
+            if not valid:
+                continue
+            if buf is None:
+                buf = np.empty((snapshots,) + x.shape[1:], np.complex64)
+            if n_in == 0:
+                first_start = float(m.times[i]) - 0.5 * float(m.nfft) / spec.fs
+            buf[n_in] = x[i]
+            n_in += 1
+            times.append(float(m.times[i]))
+            heads.append(float(m.headings[i]))
+            if n_in == snapshots:
+                acc = np.zeros((x.shape[1], x.shape[2], x.shape[2]), np.complex128)
+                accumulate(acc, buf, threads)
+                span = times[-1] + 0.5 * float(m.nfft) / spec.fs - first_start
+                yield CovarianceGroup(acc / snapshots, snapshots, float(np.mean(times)),
+                                      _circ_mean_deg(heads), first_start, span, spec)
+                valid = False
 
 
 def accumulate(acc: np.ndarray, x: np.ndarray, threads: int = 1) -> None:
@@ -129,7 +128,7 @@ def accumulate(acc: np.ndarray, x: np.ndarray, threads: int = 1) -> None:
 
     # always on the pool's workers, even one: they run single-threaded BLAS, where OpenBLAS's
     # own threads in the calling thread cost 10x the CPU time on a loaded machine (measured)
-    n_thr = max(1, min(threads, nf // 16))
+    n_thr = max(1, min(threads, nf // 64))  # as _covstage.BINS_PER_THREAD
     edges = [nf * k // n_thr for k in range(n_thr + 1)]
     list(workers.pool(n_thr).map(run, [slice(edges[k], edges[k + 1]) for k in range(n_thr)]))
 
@@ -163,14 +162,14 @@ def exchange(positions: np.ndarray, tol: float = 1e-6) -> np.ndarray | None:
 
 
 def forward_backward(r: np.ndarray, perm: np.ndarray) -> np.ndarray:
-    """Forward-backward average R_fb = ½ (R + J R* J) (Van Trees eq. 7.331, Pillai 1989): for a
+    """Forward-backward average R_fb = ½ (R + J R* J) (Pillai 1989): for a
     centro-symmetric array J a* = a (phase centre at the centroid), so every plane-wave term is
     kept and the cross terms of coherent sources are decorrelated."""
     return 0.5 * (r + r[..., perm[:, None], perm[None, :]].conj())
 
 
 def spatial_smoothing(r: np.ndarray, order: np.ndarray, subarrays: int) -> np.ndarray:
-    """Forward spatial smoothing (Shan, Wax & Kailath 1985, eq. 7): the mean of the covariances
+    """Forward spatial smoothing (Shan, Wax & Kailath 1985): the mean of the covariances
     of ``subarrays`` overlapping subarrays of L = C − subarrays + 1 consecutive elements of a
     uniform line array (``order``: channels from the forward end aft). Returns (F, L, L) in the
     element order of ``order``; M coherent sources need subarrays ≥ M (and L > M)."""

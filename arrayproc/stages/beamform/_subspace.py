@@ -9,7 +9,7 @@ import numpy as np
 
 def source_count(lam: np.ndarray, snapshots: int, rule: str) -> np.ndarray:
     """Number of sources per bin from the eigenvalues ``lam`` (F, C) (any order) of a sample
-    covariance of ``snapshots`` snapshots, by AIC or MDL (Wax & Kailath 1985, eqs. 16, 17):
+    covariance of ``snapshots`` snapshots, by AIC or MDL (Wax & Kailath 1985):
 
         L(k) = K (C − k) log( a(k) / g(k) ),  a, g: arithmetic and geometric means of the
                C − k smallest eigenvalues;
@@ -82,7 +82,7 @@ def root_music(qn: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def top_subspace(r: np.ndarray, m: int, tol: float = 1e-10, max_iter: int = 16,
                  seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The ``m`` leading eigenpairs of the Hermitian ``r`` (F, C, C) by block orthogonal
-    iteration with a Rayleigh-Ritz step (Golub & Van Loan, Matrix Computations, alg. 8.2.7),
+    iteration with a Rayleigh-Ritz step (subspace iteration, Golub & Van Loan, Matrix Computations),
     all bins at once: Q ← qr(R Q), converging as (λ_{m+1}/λ_m)^k. A bin stops when its
     residual ‖R Q − Q T‖ is below ``tol``·‖R‖ (T = Q^H R Q); bins still above after
     ``max_iter`` steps (weak or nearly degenerate signal eigenvalues) take numpy's full

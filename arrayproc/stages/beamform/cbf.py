@@ -117,6 +117,28 @@ def symmetric_pairs(rel: np.ndarray, weights: np.ndarray,
     return np.flatnonzero(keep), match[keep]
 
 
+def check_frame_keys(stage: Stage) -> None:
+    """The checks of the keys ``cbf`` shares with the frequency-domain beamformers (``hop``,
+    ``threads``, ``band``, ``beams``): ``hop = 0`` becomes nfft/2, a hop beyond nfft warns,
+    and ``stage.beam_axis``, ``stage._dirs``, ``stage.beam_mode`` are set from ``beams``."""
+    w = f"stage {stage.name!r}"
+    if stage.hop == 0:
+        stage.hop = max(1, stage.nfft // 2)
+    if not 0 < stage.hop:
+        raise ConfigError(f"{w}: key 'hop' must be > 0, got {stage.hop}")
+    if stage.hop > stage.nfft:  # allowed (sparse snapshots), but never silently
+        warnings.warn(f"{w}: key 'hop' ({stage.hop}) exceeds 'nfft' ({stage.nfft}): each "
+                      f"snapshot skips {stage.hop - stage.nfft} samples", stacklevel=3)
+    if stage.threads < 0:
+        raise ConfigError(f"{w}: key 'threads' must be >= 0, got {stage.threads}")
+    if stage.band is not None and stage.band[0] < 0:
+        raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {stage.band}")
+    try:
+        stage.beam_axis, stage._dirs, stage.beam_mode = beam_directions(stage.beams)
+    except ConfigError as e:
+        raise ConfigError(f"{w}: {e}") from None
+
+
 @register
 class CBF(Stage):
     """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc.
@@ -158,15 +180,25 @@ class CBF(Stage):
     accepts = frozenset({Domain.TIME})
     produces = Domain.BEAMS
     params = {
-        "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive),
-        "hop": Param("int", 0, "samples between snapshots (0: nfft/2)"),
+        "nfft": Param("int", 2048, "samples per snapshot (DFT length)", check=positive,
+                      unit="samples"),
+        "hop": Param("int", 0, "samples between snapshots (0: nfft/2)", unit="samples"),
         "window": Param("str", "hann", "time taper of each snapshot", choices=WINDOWS),
-        "band": Param("band", None, "[lo, hi] Hz of the bins to beamform (default: all)"),
+        "band": Param("band", None, "[lo, hi] Hz of the bins to beamform (default: all); "
+                      "an upper edge above the input's Nyquist frequency (fs/2, or fc + fs/2 for "
+                      "complex baseband) is refused; a band above the array's spatial-aliasing "
+                      "limit c/(2d) gets a warning",
+                      unit="Hz"),
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                       "cone angles {start, stop, count} or {bearings, elevations}, deg"),
+                       "cone angles {start, stop, count} (spacing = \"angle\" "
+                       "or \"cos\"), or {bearings, elevations}: every combination of a bearing "
+                       "relative to the array's forward axis and an elevation above the "
+                       "horizontal, deg",
+                       unit="deg"),
         "shading": Param("str", "none", "array shading", choices=SHADINGS),
-        "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB",
-                             check=positive),
+        "sidelobe_db": Param("float", 30.0, "sidelobe level of taylor/chebyshev shading, dB "
+                             "below the main lobe",
+                             check=positive, unit="dB"),
         "batch": Param("int", 32, "snapshots per GEMM batch (and per output block)",
                        check=positive),
         "threads": Param("int", 0, "worker threads, each on a part of the batch's snapshots "
@@ -174,22 +206,7 @@ class CBF(Stage):
     }
 
     def validate(self) -> None:
-        w = f"stage {self.name!r}"
-        if self.hop == 0:
-            self.hop = max(1, self.nfft // 2)
-        if not 0 < self.hop:
-            raise ConfigError(f"{w}: key 'hop' must be > 0, got {self.hop}")
-        if self.hop > self.nfft:  # allowed (sparse snapshots), but never silently
-            warnings.warn(f"{w}: key 'hop' ({self.hop}) exceeds 'nfft' ({self.nfft}): each "
-                          f"snapshot skips {self.hop - self.nfft} samples", stacklevel=2)
-        if self.threads < 0:
-            raise ConfigError(f"{w}: key 'threads' must be >= 0, got {self.threads}")
-        if self.band is not None and self.band[0] < 0:
-            raise ConfigError(f"{w}: key 'band' must be >= 0 Hz, got {self.band}")
-        try:
-            self.beam_axis, self._dirs, self.beam_mode = beam_directions(self.beams)
-        except ConfigError as e:
-            raise ConfigError(f"{w}: {e}") from None
+        check_frame_keys(self)
         self._unique, self._uidx, self._sign = pair_directions(self._dirs)
         self._runs = kb.beam_runs(self._uidx, self._sign)
         self._win = time_taper(self.window, self.nfft).astype(np.float32)

@@ -52,11 +52,11 @@ class _SyntheticAperture(Stage):
         "snapshot": Param("str", "", "snapshot length rule when framing time data: 'psas', "
                           "'etam' or 'nfft' (default: the stage's own rule)",
                           choices=("", "psas", "etam", "nfft")),
-        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'"),
+        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'", unit="samples"),
         "window": Param("str", "none", "time taper", choices=("none", "hann", "hamming")),
-        "band": Param("band", None, "[lo, hi] Hz (default: all bins)"),
+        "band": Param("band", None, "[lo, hi] Hz (default: all bins)", unit="Hz"),
         "beams": Param("table", {"start": 0.0, "stop": 180.0, "count": 181},
-                       "cone angles {start, stop, count}, deg"),
+                       "cone angles {start, stop, count}, deg", unit="deg"),
     }
 
     def validate(self) -> None:

@@ -193,17 +193,20 @@ class IBF(Stage):
     params = {
         "max_sources": Param("int", 3, "plane waves removed per bin at most", check=positive),
         "stop_db": Param("float", 3.0, "stop when the loudest beam is less than this above the "
-                         "noise estimate, dB"),
-        "sector": Param("band", None, "[lo, hi] cone angles (deg) to peel (default: all)"),
+                         "noise estimate (median band beam power over directions), dB", unit="dB"),
+        "sector": Param("band", None, "[lo, hi] cone angles (deg) to peel (default: all)",
+                        unit="deg"),
         "keep_sources": Param("int", 2, "waves outside the sector (or beyond max_sources) kept "
                               "in the joint estimate but not removed, per bin"),
         "snapshot": Param("str", "etam", "snapshot length when framing time data: from the nav "
-                          "speed by the 'etam' (eq. 2.52) or 'psas' (eq. 2.32) rule, or 'nfft'",
+                          "speed by the 'etam' (T_B = (N_H−1)δx/2U, eq. 2.52) or 'psas' (T_B = "
+                          "N_H δx/U, eq. 2.32) rule, rounded up to an FFT-friendly length, or "
+                          "'nfft'",
                           choices=("etam", "psas", "nfft")),
-        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'"),
+        "nfft": Param("int", 0, "samples per snapshot when snapshot = 'nfft'", unit="samples"),
         "window": Param("str", "none", "time taper", choices=("none", "hann", "hamming")),
-        "band": Param("band", None, "[lo, hi] Hz (default: all bins)"),
-        "record": Param("bool", True, "write removed waves to the products group"),
+        "band": Param("band", None, "[lo, hi] Hz (default: all bins)", unit="Hz"),
+        "record": Param("bool", True, "write the removed waves (products ibf_removed)"),
     }
 
     def validate(self) -> None:

@@ -22,7 +22,9 @@ kd → 0. Weights (``weights``):
   amplify the noise without bound, so ``wng_loss_db`` (default 10 dB) caps the loss of
   white-noise gain against delay-and-sum (WNG floor G = N / 10^(loss/10)): where N(1 − |ρ|²)
   < G, γ < 1 is the deepest null whose WNG N(1 − γ|ρ|²)²/(1 − 2γ|ρ|² + γ²|ρ|²) still reaches
-  G (then the mirror's signal response is |ρ|(1 − γ)/(1 − γ|ρ|²) of the look's);
+  G (then the mirror's signal response is |ρ|(1 − γ)/(1 − γ|ρ|²) of the look's). The beams
+  at exact end-fire (β = 0°, 180°: the mirror is the look direction) keep delay-and-sum
+  weights, so their noise level sits up to ``wng_loss_db`` below their neighbours';
 - ``"adaptive"``: MVDR over the whole array on these beams (``mvdr`` keys ``snapshots``,
   ``loading``, ``wng_db``): the adaptive port/starboard beamformer of Groen et al. (2005),
   which places its null on the real source when steered at its mirror.
@@ -131,13 +133,15 @@ class LRCBF(Stage):
     params = {
         **{k: COMMON[k] for k in ("nfft", "hop", "window", "band", "snapshots", "threads")},
         "beams": Param("table", {"start": -179.0, "stop": 180.0, "count": 360},
-                       "relative bearings {start, stop, count}, deg in (-180, 180]"),
-        "weights": Param("str", "cardioid", "das, cardioid or adaptive (MVDR)",
+                       "relative bearings {start, stop, count}, deg in (-180, 180]", unit="deg"),
+        "weights": Param("str", "cardioid", "das (delay-and-sum), cardioid (unit response at β, "
+                         "null at −β) or adaptive (MVDR on these beams)",
                          choices=("das", "cardioid", "adaptive")),
         "wng_loss_db": Param("float", 10.0, "cardioid: largest loss of white-noise gain "
                              "against delay-and-sum, dB (the null is made shallower beyond)",
-                             check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
-        "wng_db": Param("float", None, "adaptive: white-noise-gain floor, dB (as mvdr)"),
+                             check=lambda v: None if v >= 0 else f"must be >= 0, got {v}",
+                             unit="dB"),
+        "wng_db": Param("float", None, "adaptive: white-noise-gain floor, dB (as mvdr)", unit="dB"),
         "loading": Param("float", 0.01, "adaptive: diagonal loading re the mean element power",
                          check=lambda v: None if v >= 0 else f"must be >= 0, got {v}"),
         "batch": Param("int", 32, "snapshots per output block (das, cardioid)", check=positive),
@@ -231,6 +235,12 @@ class LRCBF(Stage):
         for b in self._mvdr.process(checked(blocks)):
             yield b.replace(beams=self.beam_axis,
                             meta=dataclasses.replace(b.meta, beam_mode="lr"))
+
+    def segment_grid(self, fs: float, n_channels: int) -> int:
+        """Segment reads on the adaptive covariance groups' grid, or on the frames' hop."""
+        if self._mvdr is not None:
+            return self._mvdr.segment_grid(fs, n_channels)
+        return int(self.hop)
 
     def warmup_seconds(self, fs: float) -> float:
         if self._mvdr is not None:

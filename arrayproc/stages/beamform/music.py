@@ -6,7 +6,7 @@ Per bin f and covariance group (``snapshots`` snapshots, :mod:`_covariance`): th
 of R̂ (after forward-backward averaging and/or spatial smoothing over ``smoothing`` subarrays)
 split into the signal subspace E_s of the M largest eigenvalues and the noise subspace E_n;
 
-    P(θ) = L / (a^H E_n E_n^H a) = L / (L − a^H E_s E_s^H a)        (Schmidt 1986, eq. 5)
+    P(θ) = L / (a^H E_n E_n^H a) = L / (L − a^H E_s E_s^H a)        (Schmidt 1986)
 
 with a(θ) the ``cbf`` steering vector of the L elements used (L = N, or the subarray length
 N − smoothing + 1). P is dimensionless, about L/(L − M) away from the sources and large at
@@ -53,7 +53,8 @@ class MUSIC(CovarianceStage):
     kind = "music"
     params = {
         **COMMON,
-        "sources": Param("any", "mdl", "number of sources, or 'mdl' / 'aic' per bin",
+        "sources": Param("any", "mdl", "number of sources, or 'mdl' / 'aic' per bin (needs "
+                         "snapshots >= elements)",
                          check=_sources),
         "max_sources": Param("int", 8, "cap on the estimated number of sources",
                              check=positive),

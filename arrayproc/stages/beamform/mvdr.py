@@ -3,7 +3,7 @@ domain, with diagonal loading fixed or set by a white-noise-gain constraint.
 
 Per bin f and covariance group (the mean of ``snapshots`` snapshot outer products, see
 :mod:`_covariance`) the weights that pass a plane wave from θ undistorted and minimise the
-output power are (Capon 1969; Van Trees eq. 6.14)
+output power are (Capon 1969)
 
     w(θ) = R_δ⁻¹ a(θ) / (a(θ)^H R_δ⁻¹ a(θ)),      R_δ = R̂ + δ I,
 
@@ -11,11 +11,12 @@ with a(θ) the steering vector of ``cbf`` (so the beams point where the CBF beam
 stage writes, scaled by N² (N elements) so that a plane wave alone has the level it has in
 ``cbf`` (``power = "capon"``)
 
-    P(θ) = N² / (a^H R_δ⁻¹ a)                                   (Capon estimate, eq. 6.15)
+    P(θ) = N² / (a^H R_δ⁻¹ a)                                   (Capon estimate)
 
 or (``power = "output"``) the output power of the loaded beam itself, N² w^H R̂ w, which is
-exact for any loading (with δ → ∞ it tends to the CBF power) where the Capon estimate is
-biased up by δ·N/N² for white noise (+0.04 dB at the default ε = 0.01 re the element power).
+exact for any loading (with δ → ∞ it tends to the CBF power), where the Capon estimate of
+the loaded covariance is biased up: N²/a^H R_δ⁻¹ a = N(σ² + δ) for white noise of power σ²,
+a factor 1 + ε (+0.04 dB at the default ε = 0.01).
 
 Loading (Carlson 1988; Cox, Zeskind & Owen 1987):
 
@@ -26,7 +27,7 @@ Loading (Carlson 1988; Cox, Zeskind & Owen 1987):
   steering vector on the eigenvectors (F·N²·B work; several times slower than fixed loading).
 
 ``forward_backward = true`` averages R̂ with J R̂* J (centro-symmetric arrays, e.g. uniform line
-arrays; Van Trees 7.331): twice the effective snapshots, and coherent pairs decorrelated.
+arrays; Pillai 1989): twice the effective snapshots, and coherent pairs decorrelated.
 
 Implementation: one batched inverse per group (numpy's gufunc over the bins, bins split over
 the worker threads), then the Hermitian forms a^H R_δ⁻¹ a of every beam through the co-array
@@ -56,14 +57,14 @@ class MVDR(CovarianceStage):
     kind = "mvdr"
     params = {
         **COMMON,
-        "loading": Param("float", 0.01, "diagonal loading ε relative to the mean element "
-                         "power tr(R)/N", check=_nonneg),
+        "loading": Param("float", 0.01, "diagonal loading ε: δ = ε·tr(R)/N, relative to the "
+                         "mean element power", check=_nonneg),
         "wng_db": Param("float", None, "white-noise-gain floor, dB (<= 10 log10 N): loading "
-                        "raised per beam until reached"),
+                        "raised per beam until reached", unit="dB"),
         "forward_backward": Param("bool", False, "forward-backward averaging "
                                   "(centro-symmetric arrays)"),
-        "power": Param("str", "capon", "Capon estimate N²/a^H R⁻¹ a, or the loaded beam's "
-                       "output power N² w^H R w", choices=("capon", "output")),
+        "power": Param("str", "capon", "capon (N²/a^H R_δ⁻¹ a) or output (the loaded "
+                       "beam's output power N² w^H R w)", choices=("capon", "output")),
     }
 
     def prepare(self, positions: np.ndarray, freqs: np.ndarray) -> None:

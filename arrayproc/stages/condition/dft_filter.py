@@ -123,10 +123,13 @@ class DFTFilter(Stage):
     accepts = frozenset({Domain.TIME})
     produces = Domain.TIME
     params = {
-        "band": Param("band", doc="[lo, hi] Hz kept (Tukey window spans it)"),
-        "taper": Param("float", 0.1, "Tukey α of the band window, 0..1"),
-        "decimate": Param("int", 1, "integer decimation factor", check=positive),
-        "complex": Param("bool", False, "complex baseband output instead of a real series"),
+        "band": Param("band", doc="[lo, hi] Hz kept (Tukey window spans it)", unit="Hz"),
+        "taper": Param("float", 0.1, "Tukey α of the band window, 0..1: raised-cosine "
+                      "edges of α(hi−lo)/2 inside the band"),
+        "decimate": Param("int", 1, "integer decimation factor; real output needs "
+                         "hi ≤ fs/(2·decimate)", check=positive),
+        "complex": Param("bool", False, "complex baseband output around fc (the bin "
+                        "nearest the band centre, meta['fc']) instead of a real series"),
     }
 
     def validate(self) -> None:

@@ -39,8 +39,9 @@ class Localise(Stage):
         "min_pairs": Param("int", 4, "fewest usable delays of a localised event"),
         "cov_scale": Param("str", "none", "none, fit (χ²/dof) or inflate (max(1, χ²/dof))",
                            choices=COV_SCALES),
-        "max_range": Param("float", 100.0, "half-size of the search box around the array, m"),
-        "sigma_floor": Param("float", 0.0, "added in quadrature to every delay σ, s"),
+        "max_range": Param("float", 100.0, "half-size of the search box around the array, m",
+                           unit="m"),
+        "sigma_floor": Param("float", 0.0, "added in quadrature to every delay σ, s", unit="s"),
     }
 
     def check_input(self, domain) -> None:

@@ -41,18 +41,21 @@ class Tde(Stage):
     produces = DELAYS
     params = {
         "reference": Param("int", 0, "reference channel"),
-        "band": Param("band", None, "band [lo, hi] Hz of the cross-spectrum (default: all)"),
+        "band": Param("band", None, "band [lo, hi] Hz of the cross-spectrum (default: all)",
+                      unit="Hz"),
         "method": Param("str", "xcorr", "xcorr or unwrap", choices=("xcorr", "unwrap")),
         "weighting": Param("str", "none", "GCC weighting", choices=WEIGHTINGS),
         "interp": Param("str", "fft", "sub-sample peak", choices=INTERPS),
-        "margin": Param("float", 1e-4, "added to the geometric lag limit, s"),
+        "margin": Param("float", 1e-4, "added to the geometric lag limit, s", unit="s"),
         "smooth_bins": Param("int", 9, "bins averaged for the scot/ml spectra",
-                             check=positive),
-        "nfft": Param("int", None, "snapshot length for time blocks, samples"),
-        "hop": Param("int", None, "snapshot hop for time blocks, samples (default nfft/2)"),
+                             check=positive, unit="bins"),
+        "nfft": Param("int", None, "snapshot length for time blocks, samples", unit="samples"),
+        "hop": Param("int", None, "snapshot hop for time blocks, samples (default nfft/2)",
+                     unit="samples"),
         "unwrap_threshold": Param("float", 0.5, "app. B residual RMS threshold, rad",
-                                  check=positive),
-        "unwrap_window": Param("int", 16, "app. B sliding window, bins", check=positive),
+                                  check=positive, unit="rad"),
+        "unwrap_window": Param("int", 16, "app. B sliding window, bins", check=positive,
+                               unit="bins"),
     }
 
     def validate(self) -> None:

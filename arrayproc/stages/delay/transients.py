@@ -32,16 +32,19 @@ class Transients(Stage):
     produces = Domain.EVENT
     params = {
         "channel": Param("int", 0, "reference channel of the detection"),
-        "band": Param("band", None, "band [lo, hi] Hz of the energy (default: 0 to fs/2)"),
-        "threshold_db": Param("float", 10.0, "threshold over the running-median background, dB"),
-        "min_duration": Param("float", 0.02, "shortest event, s"),
-        "merge_gap": Param("float", 0.05, "events closer than this merge, s", check=positive),
-        "max_duration": Param("float", 2.0, "longer events are cut, s", check=positive),
+        "band": Param("band", None, "band [lo, hi] Hz of the energy (default: 0 to fs/2)",
+                      unit="Hz"),
+        "threshold_db": Param("float", 10.0, "threshold over the running-median background, dB",
+                              unit="dB"),
+        "min_duration": Param("float", 0.02, "shortest event, s", unit="s"),
+        "merge_gap": Param("float", 0.05, "events closer than this merge, s", check=positive,
+                           unit="s"),
+        "max_duration": Param("float", 2.0, "longer events are cut, s", check=positive, unit="s"),
         "nfft": Param("int", 512, "detection frame length, samples (hop nfft/2)",
-                      check=lambda v: None if v >= 8 else "must be >= 8"),
-        "background": Param("float", 5.0, "median background window, s", check=positive),
+                      check=lambda v: None if v >= 8 else "must be >= 8", unit="samples"),
+        "background": Param("float", 5.0, "median background window, s", check=positive, unit="s"),
         "pad": Param("float", None, "padding of event blocks, s (default: largest travel "
-                     "time across the array plus one frame)"),
+                     "time across the array plus one frame)", unit="s"),
     }
 
     def warmup_seconds(self, fs: float) -> float:

@@ -62,25 +62,25 @@ class NarrowbandEKFStage(Stage):
     accepts = frozenset({Domain.TIME})
     params = {
         "freq": Param("any", "auto", "initial tonal frequency, Hz, or \"auto\"",
-                      check=_auto_or("Hz", 0.0, None)),
+                      check=_auto_or("Hz", 0.0, None), unit="Hz"),
         "cone": Param("any", "auto", "initial cone angle, deg (0 forward), or \"auto\"",
-                      check=_auto_or("deg", 0.0, 180.0)),
+                      check=_auto_or("deg", 0.0, 180.0), unit="deg"),
         "sigma_cone_deg": Param("float", 0.05, "process noise of the cone, deg/√s",
-                                check=positive),
+                                check=positive, unit="deg/√s"),
         "sigma_freq_hz": Param("float", 0.01, "process noise of the frequency, Hz/√s",
-                               check=positive),
+                               check=positive, unit="Hz/√s"),
         "p0_cone_deg": Param("float", 2.0, "initial standard deviation of the cone, deg",
-                             check=positive),
+                             check=positive, unit="deg"),
         "p0_freq_hz": Param("float", 0.5, "initial standard deviation of the frequency, Hz",
-                            check=positive),
+                            check=positive, unit="Hz"),
         "noise": Param("any", "auto", "measurement noise power of the input samples "
                        "(real: variance, complex: E|v|²), or \"auto\" to estimate it",
                        check=_auto_or("", 1e-300, None)),
         "reinit_s": Param("float", 30.0, "re-initialisation period of each filter, s",
-                          check=positive),
+                          check=positive, unit="s"),
         "dual": Param("bool", True, "two filters re-initialised half a period apart"),
         "output_rate": Param("float", 10.0, "rows per second written to nb_tracks, Hz",
-                             check=positive),
+                             check=positive, unit="Hz"),
         "align_phase": Param("bool", True, "start each (re)initialised filter with its model "
                              "phase matched (false: the thesis's re-initialisation)"),
         "spatial_doppler": Param("bool", True, "own-speed Doppler factor on the element delays "

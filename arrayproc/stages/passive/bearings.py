@@ -91,29 +91,36 @@ class Bearings(Stage):
     kind = "bearings"
     accepts = frozenset({Domain.POWER})
     params = {
-        "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)"),
+        "band": Param("band", None, "[lo, hi] Hz for broadband peaks (default: all bins)",
+                      unit="Hz"),
         "broadband": Param("bool", True, "pick peaks on the broadband (BTR) beam power"),
         "lines": Param("bool", False, "pick peaks on narrowband (LOFAR) lines"),
-        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median, dB"),
-        "line_threshold_db": Param("float", 10.0, "line threshold over TPSW background, dB"),
+        "threshold_db": Param("float", 6.0, "broadband peak threshold over the median over "
+                              "beams, dB",
+                              unit="dB"),
+        "line_threshold_db": Param("float", 10.0, "line threshold over the TPSW background (and "
+                                   "over the beam row's median), dB",
+                                   unit="dB"),
         "line_dynamic_db": Param("float", 10.0, "line peaks more than this below the line's "
                                  "strongest peak are taken for its sidelobes, dB",
-                                 check=positive),
+                                 check=positive, unit="dB"),
         "min_separation": Param("float", 4.0, "minimum separation of peaks, deg",
-                                check=lambda v: None if v >= 0 else "must be >= 0"),
+                                check=lambda v: None if v >= 0 else "must be >= 0", unit="deg"),
         "peak_widths": Param("float", 0.0, "minimum separation in half-power widths of the "
-                             "stronger peak, measured on the row (0: off)",
+                             "stronger peak, measured on the row (0: off); for "
+                             "mvdr/music beams use min_separation = 0, peak_widths = 1",
                              check=lambda v: None if v >= 0 else "must be >= 0"),
         "lr_rejection_db": Param("float", 10.0, "relative-bearing beams: a peak this far above "
                                  "its mirror beam is taken as resolved to its side, dB",
-                                 check=positive),
+                                 check=positive, unit="dB"),
         "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
         "max_lines": Param("int", 16, "lines per snapshot", check=positive),
-        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
-        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
+        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive, unit="bins"),
+        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins", unit="bins"),
         "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
-                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive,
+                     unit="sample units"),
     }
 
     _lr = False

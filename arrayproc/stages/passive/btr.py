@@ -6,7 +6,9 @@ For each snapshot of the input (power blocks ``("snapshot", "freq", "beam")`` fr
 kind ``btr``: ``time`` (n_t) s (centre of the integrated snapshots), ``cone_deg`` (n_beams),
 ``power_db`` (n_t, n_beams) float32 in dB re ``ref``² (1 µPa² for data in Pa; the CBF sums are
 unnormalised, so the level includes the gains N_DFT·N_H·N_B of thesis 2.1.2.1). For 3-D beams
-``cone_deg`` holds the relative bearings and ``elevation_deg`` the elevations. Blocks pass on.
+``cone_deg`` holds the relative bearings and ``elevation_deg`` the elevations; for the
+relative-bearing beams of ``lr_cbf`` (attr ``beam_mode = "lr"``) ``cone_deg`` holds relative
+bearings in (−180°, 180°], port negative. Blocks pass on.
 """
 
 from __future__ import annotations
@@ -30,9 +32,11 @@ class BTR(Stage):
     kind = "btr"
     accepts = frozenset({Domain.POWER})
     params = {
-        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins)"),
+        "band": Param("band", None, "[lo, hi] Hz summed (default: all input bins); "
+                      "products btr", unit="Hz"),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
-                     "1 µPa for data in Pa, full scale for data in FS)", check=positive),
+                     "1 µPa for data in Pa, full scale for data in FS)", check=positive,
+                     unit="sample units"),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
@@ -46,6 +50,7 @@ class BTR(Stage):
                 if out is not None:
                     for k, v in beam_columns(b.beams).items():
                         out.set(k, v)
+                    out.attrs["beam_mode"] = str(getattr(b.meta, "beam_mode", "cone"))
                     out.attrs["freq_lo"] = float(b.freqs[idx[0]])
                     out.attrs["freq_hi"] = float(b.freqs[idx[-1]])
             p = b.data[:, idx[0]:idx[-1] + 1, :] if idx.size == idx[-1] - idx[0] + 1 \

@@ -43,7 +43,8 @@ class Integrate(Stage):
     produces = Domain.POWER
     params = {
         "snapshots": Param("int", 8, "N_B, snapshots per sum", check=positive),
-        "mode": Param("str", "blockwise", "disjoint sums or a sliding sum",
+        "mode": Param("str", "blockwise", "blockwise (disjoint sums) or sliding (one sum per "
+                      "input snapshot)",
                       choices=("blockwise", "sliding")),
         "mean": Param("bool", False, "divide the sum by N_B"),
         "threads": Param("int", 0, "worker threads, each on a part of the (freq, beam) cells "

@@ -51,17 +51,19 @@ class LOFAR(Stage):
     kind = "lofar"
     accepts = frozenset({Domain.POWER})
     params = {
-        "beams": Param("any", "all", "\"all\" or a list of cone angles, deg",
-                       check=_beams_check),
-        "band": Param("band", None, "[lo, hi] Hz shown (default: all input bins)"),
-        "normalise": Param("str", "tpsw", "background normalisation",
+        "beams": Param("any", "all", "\"all\" or a list of cone angles (the nearest "
+                       "beams), deg; products lofar",
+                       check=_beams_check, unit="deg"),
+        "band": Param("band", None, "[lo, hi] Hz shown (default: all input bins)", unit="Hz"),
+        "normalise": Param("str", "tpsw", "background normalisation: tpsw (level over the "
+                           "two-pass split-window background, dB) or none (dB re ref²)",
                            choices=("tpsw", "none")),
-        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive),
-        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins"),
+        "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive, unit="bins"),
+        "tpsw_gap": Param("int", 3, "TPSW half-gap, bins", unit="bins"),
         "tpsw_clip": Param("float", 2.0, "TPSW clipping ratio", check=positive),
         "ref": Param("float", None, "reference amplitude for dB (normalise = none), in sample "
                      "units (default: 1 µPa for data in Pa, full scale for data in FS)",
-                     check=positive),
+                     check=positive, unit="sample units"),
     }
 
     def validate(self) -> None:

@@ -26,10 +26,11 @@ class Power(Stage):
     kind = "power"
     accepts = frozenset({Domain.TIME})
     params = {
-        "band": Param("band", None, "frequency band [lo, hi] Hz; whole band when absent"),
+        "band": Param("band", None, "frequency band [lo, hi] Hz; whole band when absent",
+                      unit="Hz"),
         "ref": Param("float", None, "reference amplitude for dB, in sample units (default: "
                      "1 µPa for data in Pa, full scale for data in FS)",
-                     check=positive),
+                     check=positive, unit="sample units"),
     }
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:

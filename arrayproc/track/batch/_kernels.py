@@ -95,22 +95,53 @@ def bo_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, meas: 
     n_pop = pop.shape[1]
     out = np.empty(n_pop)
     for p in prange(n_pop):
-        x0 = pop[0, p]
-        y0 = pop[1, p]
-        vx = pop[2, p]
-        vy = pop[3, p]
         s = 0.0
         for b in range(tau.size):
-            dx = x0 + vx * tau[b] - obs[b, 0]
-            dy = y0 + vy * tau[b] - obs[b, 1]
-            if inv_c > 0.0:
-                ax = dx
-                ay = dy
-                for _ in range(N_RETARD):
-                    dt = np.sqrt(dx * dx + dy * dy) * inv_c
-                    dx = ax - vx * dt
-                    dy = ay - vy * dt
+            dx, dy = _source_offset(pop[0, p], pop[1, p], pop[2, p], pop[3, p], tau[b],
+                                    obs[b, 0], obs[b, 1], inv_c)
             r = wrap_pi(meas[b] - atan2(dx, dy)) * weight[b]
+            s += r * r
+        out[p] = s
+    return out
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+def _source_offset(x0: float, y0: float, vx: float, vy: float, tau: float, ox: float,
+                   oy: float, inv_c: float) -> tuple[float, float]:
+    """Source minus observer (m) at ``tau`` s into the window, the source at constant velocity
+    (eq. (3.41)) and, with ``inv_c`` > 0, at its emission time (eq. (M5), ``N_RETARD``
+    fixed-point steps)."""
+    dx = x0 + vx * tau - ox
+    dy = y0 + vy * tau - oy
+    if inv_c > 0.0:
+        ax = dx
+        ay = dy
+        for _ in range(N_RETARD):
+            dt = np.sqrt(dx * dx + dy * dy) * inv_c
+            dx = ax - vx * dt
+            dy = ay - vy * dt
+    return dx, dy
+
+
+@njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
+def cone_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, cone: np.ndarray,
+                         heading: np.ndarray, weight: np.ndarray, inv_c: float = 0.0
+                         ) -> np.ndarray:
+    """Line-array cost Σ_b (w_b (θ_b − |wrap(h_b(x) − ψ_b)|))² for each state of a population.
+
+    The cone angle of the bearing ``h_b(x)`` of eq. (3.44) on an array of heading ``ψ_b``
+    (rad): no mirror side is chosen, so the source may cross end-fire or change side within
+    the window. ``cone`` (B,) measured cone angles (rad, 0 forward end-fire); the other
+    arguments as :func:`bo_cost_population`. Returns (P,).
+    """
+    n_pop = pop.shape[1]
+    out = np.empty(n_pop)
+    for p in prange(n_pop):
+        s = 0.0
+        for b in range(tau.size):
+            dx, dy = _source_offset(pop[0, p], pop[1, p], pop[2, p], pop[3, p], tau[b],
+                                    obs[b, 0], obs[b, 1], inv_c)
+            r = (cone[b] - abs(wrap_pi(atan2(dx, dy) - heading[b]))) * weight[b]
             s += r * r
         out[p] = s
     return out
@@ -272,3 +303,46 @@ def td_model_jacobian(state: np.ndarray, tau: np.ndarray, elem_x: np.ndarray,
             jac[b, n, 2] = tb * jx
             jac[b, n, 3] = tb * jy
     return h, jac
+
+
+@njit(cache=True, parallel=True, fastmath=True, error_model="numpy")
+def bf_cost_population(pop: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
+                       angle: np.ndarray, heading: np.ndarray, cone_mode: bool,
+                       w_angle: np.ndarray, freq: np.ndarray, w_freq: np.ndarray,
+                       inv_c: float) -> np.ndarray:
+    """Bearings + frequency cost for each state of a population, the rest frequency profiled.
+
+    Angle terms as :func:`bo_cost_population` (``cone_mode`` False: bearings ``angle``) or
+    :func:`cone_cost_population` (True: cone angles on headings ``heading``). Frequency terms
+    ``Σ_b (w_b (f_b − f0 g_b(x)))²`` with the Doppler factor ``g_b = 1 − ṙ_b / c`` (``ṙ`` the
+    range rate, opening positive, from the source's and the observer's velocities
+    ``obs_vel`` (B, 2) m/s) and, for each state, the least-squares rest frequency
+    ``f0 = Σ w² g f / Σ w² g²`` (the cost is quadratic in ``f0``). Returns (P,).
+    """
+    n_pop = pop.shape[1]
+    out = np.empty(n_pop)
+    for p in prange(n_pop):
+        vx = pop[2, p]
+        vy = pop[3, p]
+        s = 0.0
+        sgg = 0.0
+        sgf = 0.0
+        sff = 0.0
+        for b in range(tau.size):
+            dx, dy = _source_offset(pop[0, p], pop[1, p], vx, vy, tau[b], obs[b, 0],
+                                    obs[b, 1], 0.0)
+            brg = atan2(dx, dy)
+            if cone_mode:
+                r = (angle[b] - abs(wrap_pi(brg - heading[b]))) * w_angle[b]
+            else:
+                r = wrap_pi(angle[b] - brg) * w_angle[b]
+            s += r * r
+            rng = np.sqrt(dx * dx + dy * dy)
+            rdot = (dx * (vx - obs_vel[b, 0]) + dy * (vy - obs_vel[b, 1])) / rng
+            g = 1.0 - rdot * inv_c
+            w2 = w_freq[b] * w_freq[b]
+            sgg += w2 * g * g
+            sgf += w2 * g * freq[b]
+            sff += w2 * freq[b] * freq[b]
+        out[p] = s + sff - sgf * sgf / sgg
+    return out

@@ -10,8 +10,12 @@ the minimum is found by differential evolution (then polished by least squares, 
 bearing sequence (the thesis's simplification of Farina's two-step rejection).
 
 A line array measures a cone angle: the bearing is ``heading − θ`` (port) or ``heading + θ``
-(starboard) (DESIGN section 3). :func:`solve_line_bearings` with ``side="auto"`` solves both
-mirror hypotheses and keeps the cheaper, reporting both costs. A line array moving along its
+(starboard). :func:`solve_cone` fits the cone angle itself, ``θ_b = |wrap(h_b(x) − ψ_b)|``
+(the nearer mirror of every row), so a source that crosses end-fire or changes side while the
+ownship turns is fitted through it; it solves each pair of mirror sides at the window's ends
+and reports the data's preferred solution with its mirror (the solution with both sides
+flipped) and their cost difference. :func:`solve_line_bearings` with ``side="port"`` or
+``"starboard"`` keeps one mirror for the whole window instead. A line array moving along its
 axis at speed ``v`` measures the apparent cone angle ``cos θ_app = cos θ / (1 + (v/c) cos θ)``
 (:mod:`.motion`, eq. (M3)); given ``v``, the cone angles are corrected first (eq. (M4)).
 """
@@ -20,14 +24,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import bo_cost_population
+from ._kernels import bo_cost_population, cone_cost_population
 from .fim import bo_fim, bo_jacobian
 from .motion import emission_points, static_cone
 from .result import PolarSearch, TmaSolution, end_value, finish_solution, global_then_local
 
-__all__ = ["reject_outliers", "bearing_model", "solve_bearings", "solve_line_bearings"]
+__all__ = ["reject_outliers", "bearing_model", "cone_model", "end_side_searches",
+           "solve_bearings", "solve_cone", "solve_line_bearings"]
 
-SIDES = ("port", "starboard", "auto")
+#: ``cone`` (and its older name ``auto``): the side may change from row to row (:func:`solve_cone`)
+SIDES = ("cone", "auto", "port", "starboard")
+_SIGN = {"port": -1.0, "starboard": 1.0}
 
 
 def reject_outliers(times: np.ndarray, values: np.ndarray, sigma: float | None = None,
@@ -211,6 +218,131 @@ def solve_bearings(times: np.ndarray, bearings_rad: np.ndarray, observer_xy: np.
     return sol
 
 
+def cone_model(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, heading: np.ndarray,
+               sound_speed: float | None = None) -> np.ndarray:
+    """Cone angles ``|wrap(h_b(x) − ψ_b)|`` (rad, 0 forward end-fire) of the bearings of eq.
+    (3.44) on a line array of heading ``ψ_b`` (rad): the angle between the array's axis and
+    the line of sight, whichever side the source is on."""
+    return np.abs(_wrap(bearing_model(state, tau, obs, sound_speed) - np.asarray(heading)))
+
+
+def _cone_setup(t: np.ndarray, cone: np.ndarray, heading: np.ndarray, obs: np.ndarray,
+                t0: float | None, t1: float | None, sigma_rad: float | None, outliers: bool,
+                poly_degree: int, outlier_k: float) -> tuple:
+    """Rows kept (outliers judged on cos θ, smooth through end-fire), window ends, observer
+    at the ends and the weights."""
+    t0 = float(t[0] if t0 is None else t0)
+    t1 = float(t[-1] if t1 is None else t1)
+    keep = (reject_outliers(t, np.cos(cone), None, poly_degree, outlier_k) if outliers
+            else np.isfinite(cone))
+    n_rej = int((~keep).sum())
+    t, cone, heading, obs = t[keep], cone[keep], heading[keep], obs[keep]
+    if t.size < 5:
+        raise ValueError(f"bearings-only TMA needs at least 5 bearings, {t.size} left")
+    w = np.full(t.size, 1.0 / (sigma_rad if sigma_rad else 1.0))
+    return t, cone, heading, obs, t0, t1, n_rej, w
+
+
+def end_side_searches(t: np.ndarray, cone: np.ndarray, heading: np.ndarray, t0: float,
+                      t1: float, o0: np.ndarray, o1: np.ndarray, min_range_m: float,
+                      max_range_m: float) -> dict[tuple[str, str], PolarSearch]:
+    """One global search box per pair of mirror sides (start, end) of a line array's cone
+    angles: the bearings ``ψ ∓ θ`` of each side extrapolated to the window's ends."""
+    out = {}
+    for s0 in ("starboard", "port"):
+        for s1 in ("starboard", "port"):
+            (b0, e0) = end_value(t, heading + _SIGN[s0] * cone, t0)
+            (b1, e1) = end_value(t, heading + _SIGN[s1] * cone, t1)
+            out[(s0, s1)] = PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * e0, 10 * e1),
+                                        min_range_m, max_range_m, t1 - t0, o0, o1)
+    return out
+
+
+def solve_cone(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
+               observer_xy: np.ndarray, sigma_rad: float | None = None, *,
+               t0: float | None = None, t1: float | None = None, min_range_m: float = 50.0,
+               max_range_m: float = 20000.0, seed: int | np.random.Generator = 0,
+               outliers: bool = True, poly_degree: int = 5, outlier_k: float = 4.0,
+               popsize: int = 20, maxiter: int = 400, retarded_c: float | None = None
+               ) -> TmaSolution:
+    """Maximum-likelihood bearings-only TMA of a line array's cone angles, no side chosen.
+
+    The residual of row ``b`` is ``θ_b − |wrap(h_b(x) − ψ_b)|`` (:func:`cone_model`; thesis
+    eqs. (3.44), (3.47) with the bearing folded onto the array's axis), so the source may
+    cross end-fire or change side within the window. Its FIM is that of the bearings
+    (:func:`.fim.bo_fim`): each row of the cone Jacobian is ± the bearing row. The global
+    search runs once for each pair of mirror sides at the window's start and end (the
+    source's side there), and the least-cost solution is kept.
+
+    Parameters
+    ----------
+    times : (B,) array_like
+        s.
+    cone_rad : (B,) array_like
+        Cone angles (rad, 0 forward end-fire, π aft).
+    heading_rad : (B,) array_like
+        Array heading at each time (rad clockwise from north).
+    observer_xy : (B, 2) array_like
+        Array phase-centre positions (m).
+    sigma_rad : float, optional
+        Cone-angle standard deviation (rad); estimated from the residuals when None.
+    t0, t1, min_range_m, max_range_m, seed, outliers, poly_degree, outlier_k, popsize, \
+maxiter, retarded_c
+        As :func:`solve_bearings` (outliers are judged on ``cos θ``).
+
+    Returns
+    -------
+    TmaSolution
+        ``method = "bearings"``; ``side`` names the source's side at the window's start and
+        end (``starboard``, ``port``, ``starboard>port`` …); ``cost_other`` is the cost of the
+        mirror solution (both sides flipped), whose whole solution is in ``mirror``; their
+        difference (in units of χ², with σ given or estimated) says how strongly the data
+        prefer the solution kept. ``fitted`` holds the model cone angles (rad).
+    """
+    t = np.asarray(times, float).reshape(-1)
+    t, cone, hd, obs, t0, t1, n_rej, w = _cone_setup(
+        t, np.asarray(cone_rad, float).reshape(-1), np.asarray(heading_rad, float).reshape(-1),
+        np.asarray(observer_xy, float).reshape(t.size, 2), t0, t1, sigma_rad, outliers,
+        poly_degree, outlier_k)
+    tau = t - t0
+    o0, o1 = _observer_at(t, obs, t0), _observer_at(t, obs, t1)
+    cr = float(retarded_c) if retarded_c else None
+    inv_c = 1.0 / cr if cr else 0.0
+
+    def res(x: np.ndarray) -> np.ndarray:
+        return w * (cone - cone_model(x, tau, obs, hd, cr))
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        sign = np.sign(_wrap(bearing_model(x, tau, obs, cr) - hd))
+        return -(w * sign)[:, None] * bo_jacobian(x, tau, obs, cr)
+
+    found = {}
+    for sides, search in end_side_searches(t, cone, hd, t0, t1, o0, o1, min_range_m,
+                                           max_range_m).items():
+        found[sides] = global_then_local(
+            lambda p: cone_cost_population(p, tau, obs, cone, hd, w, inv_c), res, jac,
+            search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
+    rss = {k: float(np.sum((res(x) / w) ** 2)) for k, x in found.items()}
+    best = min(rss, key=rss.get)
+    flip = {"port": "starboard", "starboard": "port"}
+    mirror = (flip[best[0]], flip[best[1]])
+    sig = sigma_rad if sigma_rad else float(np.sqrt(rss[best] / max(t.size - 4, 1)))
+    w[:] = 1.0 / sig
+    sols = {}
+    for k in (best, mirror):
+        x = found[k]
+        sol = finish_solution("bearings", t0, t1, x, res(x), jac(x),
+                              bo_fim(x, tau, obs, sig, cr), o0, cone_model(x, tau, obs, hd, cr),
+                              n_used=t.size, n_rejected=n_rej)
+        sol.rss = rss[k]
+        sol.side = k[0] if k[0] == k[1] else f"{k[0]}>{k[1]}"
+        sols[k] = sol
+    sols[best].cost_other = sols[mirror].cost
+    sols[mirror].cost_other = sols[best].cost
+    sols[best].mirror = sols[mirror]
+    return sols[best]
+
+
 def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np.ndarray,
                         observer_xy: np.ndarray, sigma_rad: float | None = None,
                         side: str = "auto", axial_speed_mps: np.ndarray | None = None,
@@ -229,10 +361,10 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
         Array phase-centre positions (m).
     sigma_rad : float, optional
         Bearing (cone) standard deviation (rad).
-    side : {"port", "starboard", "auto"}
-        Mirror hypothesis: bearing ``heading − θ`` (port) or ``heading + θ`` (starboard);
-        ``auto`` solves both and keeps the one with the smaller sum of squared residuals
-        (the larger likelihood, with σ given or estimated).
+    side : {"cone", "auto", "port", "starboard"}
+        ``cone`` (or ``auto``): fit the cone angles themselves, the side free to change from
+        row to row (:func:`solve_cone`); ``port`` / ``starboard``: one mirror for the whole
+        window, bearing ``heading − θ`` or ``heading + θ``.
     axial_speed_mps : float or (B,) array_like, optional
         The array's speed along its axis (forward positive, m/s) at each time; when given,
         the cone angles are corrected for the array's motion during the wavefront's passage,
@@ -245,8 +377,7 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
     Returns
     -------
     TmaSolution
-        With ``side`` and, for ``auto``, ``cost_other`` (the rejected hypothesis's cost,
-        weighted with the kept solution's σ).
+        With ``side``; for ``cone``, ``cost_other`` and ``mirror`` (:func:`solve_cone`).
     """
     if side not in SIDES:
         raise ValueError(f"side must be one of {SIDES}, not {side!r}")
@@ -254,15 +385,8 @@ def solve_line_bearings(times: np.ndarray, cone_rad: np.ndarray, heading_rad: np
     if axial_speed_mps is not None:
         cone = static_cone(cone, axial_speed_mps, sound_speed)
     hd = np.asarray(heading_rad, float)
-    sols = {}
-    for s, sign in (("port", -1.0), ("starboard", 1.0)):
-        if side in (s, "auto"):
-            sol = solve_bearings(times, hd + sign * cone, observer_xy, sigma_rad, **kw)
-            sol.side = s
-            sols[s] = sol
-    if len(sols) == 1:
-        return next(iter(sols.values()))
-    best, other = sorted(sols.values(), key=lambda s: s.rss)
-    # the other hypothesis's cost with the kept one's σ (the given σ, or its estimate)
-    best.cost_other = other.rss * best.cost / best.rss if best.rss > 0 else float("inf")
-    return best
+    if side in ("cone", "auto"):
+        return solve_cone(times, cone, hd, observer_xy, sigma_rad, **kw)
+    sol = solve_bearings(times, hd + _SIGN[side] * cone, observer_xy, sigma_rad, **kw)
+    sol.side = side
+    return sol

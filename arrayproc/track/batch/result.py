@@ -68,6 +68,8 @@ class TmaSolution:
         Unweighted sum of squared residuals (rad² or s²), NaN when not computed.
     correlation : float
         Within-snapshot correlation of the delays used (``delays``; NaN otherwise).
+    mirror : TmaSolution or None
+        A line array's mirror solution (both sides flipped; :func:`.bo_tma.solve_cone`).
     """
 
     t0: float
@@ -87,6 +89,7 @@ class TmaSolution:
     fitted: np.ndarray = field(default_factory=lambda: np.zeros(0))
     rss: float = float("nan")
     correlation: float = float("nan")
+    mirror: TmaSolution | None = None
 
     @property
     def heading_deg(self) -> float:

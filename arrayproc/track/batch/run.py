@@ -19,8 +19,12 @@ Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (e
     sigma_delay_s = 1e-4       # delays; absent: the product's sigma column, else estimated
     group = "bearings"         # products group (default: the only group of the method's kind)
     recording = "rec.h5"       # default: the products file's source
-    side = "auto"              # bearings/delays on a line array: auto | port | starboard;
+    side = "auto"              # bearings on a line array: auto or cone (the side may change
+                               # from row to row: cone-angle residuals), port | starboard (one
+                               # side for the window); delays: auto | port | starboard;
                                # compact: which bearing column (port | starboard) if they differ
+    mirror_chi2 = 9.0          # bearings: the mirror solution is written too (preferred = 0)
+                               # while it costs less than this (χ²) more than the preferred
     cone_gate = [20.0, 160.0]  # bearings/compact: only rows with cone angles in [lo, hi] deg
     min_range_m = 50.0         # global search interval (bearings/delays)
     max_range_m = 20000.0      # also the half-width of the compact grid
@@ -78,11 +82,12 @@ import math
 import os
 import sys
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from arrayproc.config import Param, positive, read_toml, resolve_beside
+from arrayproc.config import Param, Schema, positive, read_toml, resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import ProductsWriter, delays_columns, read_products
 from arrayproc.io.recording import Recording
@@ -110,7 +115,7 @@ def _gate(v: Any) -> str | None:
         "must be [lo, hi] cone angles, deg, 0 <= lo < hi <= 180"
 
 
-PARAMS: dict[str, Param] = {
+PARAMS = Schema({
     "method": Param("str", doc="bearings | delays | compact",
                     choices=("bearings", "delays", "compact")),
     "window": Param("float", 0.0, "s per solution; 0: the whole file", check=_non_negative),
@@ -120,7 +125,12 @@ PARAMS: dict[str, Param] = {
                            check=_non_negative),
     "group": Param("str", "", "products group to read"),
     "recording": Param("str", "", "recording with /nav and /array"),
-    "side": Param("str", "auto", "mirror hypothesis", choices=("auto", "port", "starboard")),
+    "side": Param("str", "auto", "line arrays: cone or auto (the side may change from row to "
+                  "row), port or starboard (one side for the window)",
+                  choices=("auto", "cone", "port", "starboard")),
+    "mirror_chi2": Param("float", 9.0, "the mirror solution is written too while its cost "
+                         "exceeds the preferred one's by less than this (χ² units)",
+                         check=positive),
     "cone_gate": Param("band", None, "cone-angle gate, deg", check=_gate),
     "min_range_m": Param("float", 50.0, "m", check=positive),
     "max_range_m": Param("float", 20000.0, "m", check=positive),
@@ -143,7 +153,7 @@ PARAMS: dict[str, Param] = {
                             "planar model", check=_non_negative),
     "delay_correlation": Param("float", None, "delays: within-snapshot correlation in [0, 1); "
                                "absent: estimated", check=_unit_interval),
-}
+}, "a TMA solution ([tma] table)")
 
 
 def load_tma_config(path: str) -> dict[str, Any]:
@@ -160,20 +170,27 @@ def load_tma_config(path: str) -> dict[str, Any]:
         Every key of :data:`PARAMS`, defaults filled in.
     """
     doc, _ = read_toml(path, "TMA")
-    if not isinstance(doc.get("tma"), dict):
+    return tma_config(doc, path)
+
+
+def tma_config(doc: Mapping[str, Any], path: str) -> dict[str, Any]:
+    """Check a parsed TMA document (its ``[tma]`` table) against :data:`PARAMS`.
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed TOML.
+    path : str
+        Its file, for the messages.
+
+    Returns
+    -------
+    dict
+        Every key of :data:`PARAMS`, defaults filled in.
+    """
+    if not isinstance(doc.get("tma"), Mapping):
         raise ConfigError(f"{path}: missing [tma] table")
-    raw = doc["tma"]
-    cfg: dict[str, Any] = {}
-    for k in raw:
-        if k not in PARAMS:
-            raise ConfigError(f"{path}: unknown key tma.{k}")
-    for k, p in PARAMS.items():
-        if k in raw:
-            cfg[k] = p.convert(f"{path}: tma.{k}", raw[k])
-        elif p.required:
-            raise ConfigError(f"{path}: missing key tma.{k}")
-        else:
-            cfg[k] = p.default
+    cfg = PARAMS.check(doc["tma"], path, prefix="tma.")
     if cfg["method"] == "compact" and cfg["speed_mps"] is None:
         raise ConfigError(f"{path}: tma.speed_mps is required for method = 'compact'")
     if cfg["min_range_m"] >= cfg["max_range_m"]:
@@ -307,7 +324,8 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
         else:
             sig = None
         return solve_delays(ts, tau, elem, sig, ref=meas["reference"],
-                            sound_speed=rec.sound_speed, side=cfg["side"],
+                            sound_speed=rec.sound_speed,
+                            side="auto" if cfg["side"] == "cone" else cfg["side"],
                             heading_rad=np.deg2rad([p.heading for p in poses]),
                             array_velocity=(nav_velocity(rec.nav, ts) if cfg["array_motion"]
                                             else None),
@@ -400,6 +418,8 @@ def run_tma(products_path: str, config_path: str, output_path: str,
                       file=sys.stderr)
     if not sols:
         raise FormatError(f"{products_path}: no window with 5 or more measurements")
+    sols = with_unresolved_mirrors(sols, cfg["mirror_chi2"], products_path)
+    mirrors = {id(s.mirror) for s in sols if s.mirror is not None}
     with ProductsWriter(output_path, source=rec_path,
                         attrs={"products": os.path.abspath(products_path)}) as w:
         g = w.group("tma", "tma", stage="tma", method=cfg["method"], measurements=meas["group"],
@@ -422,5 +442,23 @@ def run_tma(products_path: str, config_path: str, output_path: str,
             heading_deg=np.array([s.heading_deg for s in sols]),
             speed_mps=np.array([s.speed_mps for s in sols]),
             range_sigma_m=np.array([s.range_sigma for s in sols]),
-            cost_mirror=np.array([s.cost_other for s in sols]))
+            cost_mirror=np.array([s.cost_other for s in sols]),
+            preferred=np.array([id(s) not in mirrors for s in sols], dtype=np.int8))
     return sols
+
+
+def with_unresolved_mirrors(sols: list[TmaSolution], chi2: float, where: str
+                            ) -> list[TmaSolution]:
+    """The solutions, each followed by its mirror (sides flipped) while the data prefer it by
+    less than ``chi2`` (the cost difference in χ² units), with one warning per such window."""
+    out = []
+    for s in sols:
+        out.append(s)
+        m = s.mirror
+        if m is not None and m.cost - s.cost < chi2:
+            warnings.warn(f"{where}: window [{s.t0:g}, {s.t1:g}] s: the mirror solution "
+                          f"({m.side}) fits within Δχ² = {m.cost - s.cost:.2g} of the preferred "
+                          f"one ({s.side}): the manoeuvre has not resolved the side; both are "
+                          "written (column preferred)", stacklevel=2)
+            out.append(m)
+    return out

@@ -18,12 +18,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FIG_3_18_SOURCE", "OwnTrack", "turn_track", "parallel_track", "line_elements",
-           "source_positions"]
+__all__ = ["FIG_3_18_SOURCE", "ENDFIRE_SOURCE", "OwnTrack", "turn_track", "parallel_track",
+           "endfire_turn_track", "line_elements", "source_positions"]
 
 
 #: Source state [x, y, vx, vy] (m, m/s) at the start of the fig. 3.18 scenario.
 FIG_3_18_SOURCE = np.array([2000.0, 1000.0, 0.0, 3.0])
+
+
+#: Source of :func:`endfire_turn_track`: 3.6 km on bearing 025 at the start, 3 m/s on course
+#: 300 (m, m/s); the ownship's turn carries it from the starboard bow through forward
+#: end-fire to the port side.
+ENDFIRE_SOURCE = np.array([3600.0 * np.sin(np.deg2rad(25.0)), 3600.0 * np.cos(np.deg2rad(25.0)),
+                           3.0 * np.sin(np.deg2rad(300.0)), 3.0 * np.cos(np.deg2rad(300.0))])
 
 
 @dataclass(frozen=True)
@@ -105,3 +112,21 @@ def source_positions(state: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Positions (B, 2) of a constant-velocity source with state [x, y, vx, vy] at τ = 0."""
     s = np.asarray(state, float)
     return s[None, :2] + np.asarray(tau, float)[:, None] * s[None, 2:]
+
+
+def endfire_turn_track(n: int = 126, dt: float = 5.0, speed: float = 5 * 1852.0 / 3600.0,
+                       turn_at: float = 300.0, turn_deg: float = 45.0,
+                       rate_deg_s: float = 1.0) -> tuple[OwnTrack, np.ndarray]:
+    """Ownship north at 5 kn, then a turn to starboard at ``rate_deg_s`` to ``turn_deg``, and
+    on: the end-fire-crossing check of the line-array TMA (with :data:`ENDFIRE_SOURCE`).
+
+    Positions are integrated at 0.1 s. Returns the track at ``n`` times ``dt`` apart and the
+    ownship velocity (n, 2) m/s.
+    """
+    fine = np.arange(0.0, (n - 1) * dt + 0.05, 0.1)
+    hd = np.deg2rad(np.clip((fine - turn_at) * rate_deg_s, 0.0, turn_deg))
+    v = speed * np.stack([np.sin(hd), np.cos(hd)], axis=1)
+    pos = np.concatenate([[[0.0, 0.0]], np.cumsum(v[:-1] * 0.1, axis=0)])
+    t = np.arange(n) * dt
+    idx = np.rint(t / 0.1).astype(int)
+    return OwnTrack(t, pos[idx], hd[idx]), v[idx]

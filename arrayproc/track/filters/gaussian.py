@@ -27,6 +27,7 @@ import numpy as np
 from arrayproc.errors import ConfigError
 from arrayproc.track.base import Param
 from arrayproc.track.filters import _kernels as kf
+from arrayproc.track.filters import stacked
 from arrayproc.track.filters.base import Filter, FilterDivergence
 from arrayproc.track.filters.points import (
     cubature_points,
@@ -214,10 +215,32 @@ def _rows(measurement_model: MeasurementModel, n: int) -> int:
 
 
 class EKF(GaussianFilter):
-    """Extended Kalman filter: first-order linearisation, Joseph-form update."""
+    """Extended Kalman filter: first-order linearisation, Joseph-form update.
+
+    One track through :meth:`predict` / :meth:`update` (numba kernels), or many stacked tracks
+    X (n, d), P (n, d, d) through :meth:`predict_stacked` / :meth:`innovation_stacked` /
+    :meth:`update_stacked` (the batched form of :mod:`arrayproc.track.filters.stacked`)."""
 
     name = "ekf"
     linearised = True
+
+    def predict_stacked(self, X: np.ndarray, P: np.ndarray, motion_model: MotionModel,
+                        dt: np.ndarray, q_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """Time update of stacked tracks (:func:`~arrayproc.track.filters.stacked.
+        predict_stacked`)."""
+        return stacked.predict_stacked(motion_model, X, P, dt, q_scale)
+
+    def innovation_stacked(self, X: np.ndarray, P: np.ndarray, Z: np.ndarray,
+                           measurement_model: MeasurementModel, ctx: Context | None
+                           ) -> tuple[np.ndarray, np.ndarray]:
+        """ν and S of every (track, measurement) pair."""
+        return stacked.innovation_stacked(measurement_model, X, P, Z, ctx)
+
+    def update_stacked(self, X: np.ndarray, P: np.ndarray, Z: np.ndarray, idx: np.ndarray,
+                       measurement_model: MeasurementModel, ctx: Context | None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Update of the pairs (tracks, ``Z[idx]``): X, P and the log-likelihoods."""
+        return stacked.update_stacked(measurement_model, X, P, Z, ctx, idx)
 
 
 class UKF(GaussianFilter):

@@ -25,6 +25,8 @@ cluster of tracks sharing measurements (written here: scipy has no JPDA).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -230,4 +232,135 @@ def jpda(d2: np.ndarray, logdet: np.ndarray, gate: float, pd: float, pg: float,
     return beta
 
 
-__all__ = ["gate_threshold", "mahalanobis", "gnn", "jpda", "MAX_EVENTS"]
+__all__ = ["gate_threshold", "mahalanobis", "gnn", "jpda", "MAX_EVENTS", "GNN", "JPDA",
+           "Association", "make_associator", "stacked_innovation", "stacked_update"]
+
+
+# ----------------------------------------------------------------------- associator parts
+
+def stacked_innovation(filt: Any, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
+                       W: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """``filt.innovation`` of stacked tracks, with the tracks' hypothesis log-weights ``W``
+    when the filter is a bank of hypotheses."""
+    return filt.innovation(X, P, Z, ctx) if W is None else filt.innovation(X, P, Z, ctx, W)
+
+
+def stacked_update(filt: Any, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
+                   idx: np.ndarray, W: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """``filt.update`` of the pairs (tracks, ``Z[idx]``): X, P and the new log-weights."""
+    if W is None:
+        Xu, Pu, _ = filt.update(X, P, Z, ctx, idx)
+        return Xu, Pu, None
+    Xu, Pu, _, Wu = filt.update(X, P, Z, ctx, idx, W)
+    return Xu, Pu, Wu
+
+
+@dataclass
+class Association:
+    """One scan's association and update: states X, P (and log-weights W) of the live
+    tracks after the update, which tracks had a measurement (``hit``) and which (``meas``,
+    −1 none), and which measurements fell inside a gate (``in_gate``) or were used
+    (``used``)."""
+
+    X: np.ndarray
+    P: np.ndarray
+    W: np.ndarray | None
+    hit: np.ndarray
+    meas: np.ndarray
+    in_gate: np.ndarray
+    used: np.ndarray
+
+
+class _Gated:
+    gate_prob: float
+
+    def _gate(self, k: int) -> float:
+        cache = self.__dict__.setdefault("_cache", {})
+        if k not in cache:
+            cache[k] = gate_threshold(self.gate_prob, k)
+        return cache[k]
+
+    def _score(self, filt: Any, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
+               W: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, float]:
+        nu, S = stacked_innovation(filt, X, P, Z, ctx, W)
+        d2, logdet = mahalanobis(nu, S)
+        return d2, logdet, self._gate(Z.shape[1])
+
+
+@dataclass
+class GNN(_Gated):
+    """Global nearest neighbour inside the χ² gate of probability ``gate_prob``
+    (:func:`gnn`), then the filter's update of the assigned pairs."""
+
+    gate_prob: float = 0.999
+
+    def __call__(self, filt: Any, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
+                 W: np.ndarray | None = None) -> Association:
+        n, m = X.shape[0], Z.shape[0]
+        hit, meas, used = np.zeros(n, bool), np.full(n, -1, np.int64), np.zeros(m, bool)
+        d2, logdet, gate = self._score(filt, X, P, Z, ctx, W)
+        in_gate = (d2 <= gate).any(0)
+        pairs = gnn(d2, logdet, gate)
+        if pairs:
+            ii = np.array([p[0] for p in pairs])
+            jj = np.array([p[1] for p in pairs])
+            Xu, Pu, Wu = stacked_update(filt, X[ii], P[ii], Z, ctx, jj,
+                                        None if W is None else W[ii])
+            X[ii], P[ii] = Xu, Pu
+            if W is not None:
+                W[ii] = Wu
+            hit[ii] = True
+            meas[ii] = jj
+            used[jj] = True
+        return Association(X, P, W, hit, meas, in_gate, used)
+
+
+@dataclass
+class JPDA(_Gated):
+    """Joint probabilistic data association (:func:`jpda`): each track updated with the
+    moment-matched mixture of its per-measurement updates and its prediction (for a linear
+    model the PDA update, BWT eqs. 3.4.3-3 to 3.4.3-7); hypothesis log-weights are mixed
+    with the same β. ``pd`` the detection probability, ``clutter_density`` λ."""
+
+    gate_prob: float = 0.999
+    pd: float = 0.9
+    clutter_density: float = 1e-3
+
+    def __call__(self, filt: Any, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
+                 W: np.ndarray | None = None) -> Association:
+        d2, logdet, gate = self._score(filt, X, P, Z, ctx, W)
+        in_gate = (d2 <= gate).any(0)
+        beta = jpda(d2, logdet, gate, self.pd, self.gate_prob, self.clutter_density)
+        ii, jj = np.nonzero(beta[:, 1:] > 0)
+        hit = (1.0 - beta[:, 0]) >= 0.5
+        meas = np.where(hit, np.argmax(beta[:, 1:], axis=1), -1)
+        used = np.zeros(Z.shape[0], bool)
+        used[meas[meas >= 0]] = True
+        if ii.size == 0:
+            return Association(X, P, W, hit, meas, in_gate, used)
+        Xu, Pu, Wu = stacked_update(filt, X[ii], P[ii], Z, ctx, jj,
+                                    None if W is None else W[ii])
+        b = beta[ii, jj + 1]
+        Xn = X * beta[:, :1]
+        np.add.at(Xn, ii, Xu * b[:, None])
+        Pn = np.zeros_like(P)
+        d0 = X - Xn
+        Pn += beta[:, 0, None, None] * (P + d0[:, :, None] * d0[:, None, :])
+        du = Xu - Xn[ii]
+        np.add.at(Pn, ii, b[:, None, None] * (Pu + du[:, :, None] * du[:, None, :]))
+        if W is not None:
+            Wn = W * beta[:, :1]
+            np.add.at(Wn, ii, Wu * b[:, None])
+            W = Wn
+        return Association(Xn, 0.5 * (Pn + Pn.transpose(0, 2, 1)), W, hit, meas, in_gate, used)
+
+
+def make_associator(name: str, gate_prob: float = 0.999, pd: float = 0.9,
+                    clutter_density: float = 1e-3) -> GNN | JPDA:
+    """The associator part named ``"gnn"`` or ``"jpda"``."""
+    if name == "gnn":
+        return GNN(gate_prob)
+    if name == "jpda":
+        return JPDA(gate_prob, pd, clutter_density)
+    raise ConfigError(f"tracker.association must be 'gnn' or 'jpda', not {name!r}")

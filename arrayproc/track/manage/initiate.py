@@ -1,4 +1,11 @@
-"""Track confirmation by the M-of-N rule (Blackman & Popoli 1999, sec. 3.2; Bar-Shalom,
+"""Track initiation and confirmation: the manager's initiator and confirmer parts.
+
+The **initiator** is any callable ``initiator(Z, t, ctx, j)`` returning the state ``(x, P)``
+(a bank's track: ``(x, P, logw)``) of a tentative track from measurement j of the scan, or
+None (e.g. :meth:`arrayproc.track.models.bearing_range_rate.BearingRangeRate.inverse` behind a
+lambda, :func:`arrayproc.track.manage.mirrored.mirrored_initial`).
+
+Track confirmation by the M-of-N rule (Blackman & Popoli 1999, sec. 3.2; Bar-Shalom,
 Willett & Tian 2011, sec. 3.1).
 
 A tentative track is confirmed as soon as it has at least M hits (scans with an associated
@@ -9,10 +16,17 @@ tentative track; only measurements outside every live track's gate start one.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
 
 from arrayproc.errors import ConfigError
 from arrayproc.track.manage.tracks import Status, Track
+
+#: ``initiator(Z, t, ctx, j) -> (x, P)``, ``(x, P, logw)`` for a bank, or None
+Initiator = Callable[[np.ndarray, float, Any, int], "tuple[np.ndarray, ...] | None"]
 
 
 @dataclass(frozen=True)
@@ -52,4 +66,4 @@ class MofN:
         return track.status
 
 
-__all__ = ["MofN"]
+__all__ = ["MofN", "Initiator"]

@@ -38,13 +38,16 @@ class TrackPoint:
     P: np.ndarray
     status: Status
     meas: int = -1
+    logw: np.ndarray | None = None
 
 
 @dataclass
 class Track:
     """A track: ``id`` (unique in a run), current state ``x``, covariance ``P`` at ``time`` (s),
     ``status``, per-scan hit flags since birth (``hits``), consecutive misses, the history of
-    :class:`TrackPoint` and free ``meta`` for the runner (e.g. the rows a bearing track used)."""
+    :class:`TrackPoint`, free ``meta`` for the runner (e.g. the rows a bearing track used) and,
+    for a track of several hypotheses (:class:`~arrayproc.track.manage.bank.StackedBank`), their
+    log-weights ``logw``."""
 
     id: int
     x: np.ndarray
@@ -55,6 +58,7 @@ class Track:
     misses: int = 0
     history: list[TrackPoint] = field(default_factory=list)
     meta: dict[str, Any] = field(default_factory=dict)
+    logw: np.ndarray | None = None
 
     @property
     def alive(self) -> bool:
@@ -77,20 +81,24 @@ class Track:
     def record(self, meas: int) -> None:
         """Append the current state as a history point with measurement index ``meas``."""
         self.history.append(TrackPoint(self.time, self.x.copy(), self.P.copy(), self.status,
-                                       int(meas)))
+                                       int(meas),
+                                       None if self.logw is None else self.logw.copy()))
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The history as arrays: ``time`` (n,) s, ``x`` (n, d), ``P`` (n, d, d), ``status``
-        (n,) str, ``meas`` (n,) int."""
+        (n,) str, ``meas`` (n,) int, and ``logw`` (n, H) for a track of hypotheses."""
         h = self.history
         d = self.x.size
-        return {
+        out = {
             "time": np.array([p.time for p in h], float),
             "x": np.array([p.x for p in h], float).reshape(len(h), d),
             "P": np.array([p.P for p in h], float).reshape(len(h), d, d),
             "status": np.array([p.status.value for p in h], dtype=object),
             "meas": np.array([p.meas for p in h], np.int64),
         }
+        if self.logw is not None:
+            out["logw"] = np.array([p.logw for p in h], float).reshape(len(h), -1)
+        return out
 
 
 #: integer codes of the ``status`` column (io.schema: 0 tentative, 1 confirmed, 2 deleted)

@@ -6,6 +6,13 @@ eq. (1)); a measurement model maps a relative state to a measurement vector with
 covariance R. Measurement components flagged in ``angular`` are angles (rad): their residuals
 are wrapped with :func:`arrayproc.geo.angles.wrap_pi` and the sample-point filters average them
 on the circle. Adding a measurement type is one new subclass of :class:`MeasurementModel`.
+
+Every model also has a *stacked* form for many tracks at once (X (n, d), the multi-target
+manager's tracks, :mod:`arrayproc.track.filters.stacked`): ``transition_stacked`` /
+``covariance_stacked`` of a linear motion model, and ``function_stacked`` /
+``jacobian_stacked`` / ``noise_stacked`` of a measurement model. The measurement model's
+defaults run its one-track methods row by row, so a new model reaches the multi-target
+tracker without writing them; models on a hot path override them with array operations.
 """
 
 from __future__ import annotations
@@ -49,12 +56,23 @@ class MotionModel(Component):
         """Process noise covariance Q over ``dt`` s, (n, n)."""
         raise NotImplementedError
 
+    def transition_stacked(self, dt: np.ndarray) -> np.ndarray:
+        """F (n, d, d) of a linear model for the time steps ``dt`` (n,) s of stacked tracks
+        held in world coordinates (no observer terms)."""
+        raise NotImplementedError(f"{self.name}: no stacked (many-track) form")
+
+    def covariance_stacked(self, dt: np.ndarray) -> np.ndarray:
+        """Q (n, d, d) for the time steps ``dt`` (n,) s of stacked tracks."""
+        raise NotImplementedError(f"{self.name}: no stacked (many-track) form")
+
 
 class MeasurementModel(Component):
     """Measurement model z = h(X; ctx) + w, w ~ N(0, R)."""
 
     name = "measurement"
     angular: ClassVar[tuple[bool, ...]] = ()
+    #: period of the angular components (2π for radians, 360 for a model in degrees)
+    angle_period: ClassVar[float] = 2.0 * math.pi
     #: number of leading state components h reads (None: all); sample-point filters form
     #: only those rows of their points (Stone Soup's measurement ``mapping``)
     state_rows: ClassVar[int | None] = None
@@ -108,6 +126,34 @@ class MeasurementModel(Component):
         R = self.covariance(ctx)
         return 0.5 * self.ndim_meas * math.log(2.0 * math.pi) + 0.5 * math.log(
             np.linalg.det(R))
+
+    # ------------------------------------------------------------- stacked (many tracks)
+    def function_stacked(self, X: np.ndarray, ctx: Context | None) -> np.ndarray:
+        """h of stacked states X (n, d) → (n, m) (default: :meth:`function_points`)."""
+        out = np.empty((X.shape[0], self.ndim_meas))
+        self.function_points(np.ascontiguousarray(X, dtype=float), ctx, out)
+        return out
+
+    def jacobian_stacked(self, X: np.ndarray, ctx: Context | None) -> np.ndarray:
+        """∂h/∂x of stacked states, (n, m, d) (default: :meth:`jacobian` row by row)."""
+        if X.shape[0] == 0:
+            return np.zeros((0, self.ndim_meas, X.shape[1]))
+        return np.stack([self.jacobian(x, ctx) for x in X])
+
+    def noise_stacked(self, Z: np.ndarray, ctx: Context | None) -> np.ndarray:
+        """R of the measurements Z (m, k) of a scan: (k, k) shared or (m, k, k) each
+        (default: :meth:`covariance`)."""
+        return np.asarray(self.covariance(ctx), float)
+
+    def wrap_stacked(self, v: np.ndarray) -> np.ndarray:
+        """Residuals ``v`` (..., m) with the angular components wrapped to
+        [−period/2, period/2)."""
+        idx = [i for i, a in enumerate(self.angular) if a]
+        if idx:
+            v = v.copy()
+            p = self.angle_period
+            v[..., idx] = (v[..., idx] + p / 2) % p - p / 2
+        return v
 
     def as_bearing(self, z: np.ndarray, ctx: Context) -> float | None:
         """The true bearing (rad) equivalent to ``z`` for bearings-only updates (the shifted

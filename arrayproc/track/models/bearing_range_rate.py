@@ -1,8 +1,10 @@
-"""Bearing, range and range-rate measurement of a 2-D constant-velocity target from a moving
-observer — the active sonar's ``contacts`` (DESIGN section 5).
+"""Bearing, range and range-rate measurement of a 2-D constant-velocity target — the active
+sonar's ``contacts``.
 
-State X = [x, y, ẋ, ẏ] (m, m/s, world frame, x east, y north); observer o = [x, y, ẋ, ẏ]
-in the context. With d = X[:2] − o[:2], δv = X[2:] − o[2:], r = |d|:
+State: the observer-relative state X = [x, y, ẋ, ẏ] of the L-R paper eq. (1) (m, m/s, x east,
+y north; the multi-target manager's world-frame tracks reach it through
+:class:`~arrayproc.track.models.frame.ObserverRelative`). With d = X[:2], δv = X[2:4],
+r = |d|:
 
     h(X) = [atan2(d_x, d_y), r, (d · δv) / r]                (bearing clockwise from north,
                                                               range, range rate positive opening)
@@ -14,82 +16,95 @@ and the Jacobian
 
 (Bar-Shalom, Li & Kirubarajan 2001, sec. 10.3; the same model as Stone Soup's
 ``CartesianToBearingRangeRate2D`` with the bearing measured from north). Radians inside,
-degrees in the configuration.
+degrees in the configuration (:meth:`BearingRangeRate.from_degrees`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from arrayproc.errors import ConfigError
+from arrayproc.track.base import Param
+from arrayproc.track.models.base import MeasurementModel
+from arrayproc.track.state import Context
+
+__all__ = ["BearingRangeRate"]
 
 
-@dataclass(frozen=True)
-class BearingRangeRate:
-    """Measurement model z = [bearing (rad), range (m), range rate (m/s)] with independent
-    noise σ_β (rad), σ_r (m), σ_ṙ (m/s). The context of :meth:`h`, :meth:`jacobian` is the
-    observer state [x, y, ẋ, ẏ] (m, m/s)."""
+def _positive(v: float) -> str | None:
+    return None if v > 0 else "must be a positive number"
 
-    sigma_bearing: float
-    sigma_range: float
-    sigma_range_rate: float
-    dim: int = 3
-    angles: tuple[int, ...] = (0,)
 
-    def __post_init__(self) -> None:
-        for k in ("sigma_bearing", "sigma_range", "sigma_range_rate"):
-            v = getattr(self, k)
-            if not (v > 0 and math.isfinite(v)):
-                raise ConfigError(f"bearing_range_rate: {k} must be a positive number")
+class BearingRangeRate(MeasurementModel):
+    """z = [bearing (rad), range (m), range rate (m/s)] + w, w ~ N(0, diag(σ_β², σ_r², σ_ṙ²))."""
+
+    name = "bearing_range_rate"
+    angular = (True, False, False)
+    state_rows = 4
+    params = {"sigma_bearing": Param("float", doc="bearing noise σ_β, rad", check=_positive),
+              "sigma_range": Param("float", doc="range noise σ_r, m", check=_positive),
+              "sigma_range_rate": Param("float", doc="range-rate noise σ_ṙ, m/s",
+                                        check=_positive)}
+
+    def _setup(self) -> None:
+        self._R = np.diag([self.sigma_bearing ** 2, self.sigma_range ** 2,
+                           self.sigma_range_rate ** 2])
 
     @classmethod
     def from_degrees(cls, sigma_bearing_deg: float, sigma_range_m: float,
                      sigma_range_rate_mps: float) -> BearingRangeRate:
         """Build from σ_β in degrees, σ_r in m, σ_ṙ in m/s."""
-        return cls(math.radians(sigma_bearing_deg), float(sigma_range_m),
-                   float(sigma_range_rate_mps))
+        return cls(sigma_bearing=math.radians(sigma_bearing_deg),
+                   sigma_range=float(sigma_range_m),
+                   sigma_range_rate=float(sigma_range_rate_mps))
 
     @staticmethod
-    def _geometry(X: np.ndarray, own: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _geometry(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         X = np.atleast_2d(np.asarray(X, float))
-        o = np.asarray(own, float).reshape(4)
-        d = X[:, :2] - o[:2]
-        dv = X[:, 2:4] - o[2:4]
+        d = X[:, :2]
+        dv = X[:, 2:4]
         r = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
         return d, dv, r
 
-    def h(self, X: np.ndarray, own: np.ndarray) -> np.ndarray:
-        """Predicted measurements (n, 3) of states X (n, 4) seen from observer ``own``."""
-        d, dv, r = self._geometry(X, own)
+    def function_stacked(self, X: np.ndarray, ctx: Context | None = None) -> np.ndarray:
+        """Predicted measurements (n, 3) of relative states X (n, ≥4)."""
+        d, dv, r = self._geometry(X)
         return np.stack([np.arctan2(d[:, 0], d[:, 1]), r, np.einsum("ni,ni->n", d, dv) / r],
                         axis=1)
 
-    def jacobian(self, X: np.ndarray, own: np.ndarray) -> np.ndarray:
-        """∂h/∂X (n, 3, 4)."""
-        d, dv, r = self._geometry(X, own)
+    def jacobian_stacked(self, X: np.ndarray, ctx: Context | None = None) -> np.ndarray:
+        """∂h/∂X (n, 3, d)."""
+        X = np.atleast_2d(np.asarray(X, float))
+        d, dv, r = self._geometry(X)
         rr = np.einsum("ni,ni->n", d, dv) / r
-        J = np.zeros((d.shape[0], 3, 4))
+        J = np.zeros((d.shape[0], 3, X.shape[1]))
         J[:, 0, 0] = d[:, 1] / r ** 2
         J[:, 0, 1] = -d[:, 0] / r ** 2
         J[:, 1, :2] = d / r[:, None]
         J[:, 2, :2] = (dv - (rr / r)[:, None] * d) / r[:, None]
-        J[:, 2, 2:] = d / r[:, None]
+        J[:, 2, 2:4] = d / r[:, None]
         return J
 
-    def noise(self, own: np.ndarray | None = None, m: int = 1) -> np.ndarray:
+    def function_points(self, X, ctx, out) -> None:
+        out[:] = self.function_stacked(X, ctx)
+
+    def jacobian(self, x: np.ndarray, ctx: Context | None = None) -> np.ndarray:
+        return self.jacobian_stacked(np.asarray(x, float)[None], ctx)[0]
+
+    def covariance(self, ctx: Context | None = None) -> np.ndarray:
         """R (3, 3) = diag(σ_β², σ_r², σ_ṙ²)."""
-        return np.diag([self.sigma_bearing ** 2, self.sigma_range ** 2,
-                        self.sigma_range_rate ** 2])
+        return self._R
+
+    def noise_stacked(self, Z: np.ndarray, ctx: Context | None) -> np.ndarray:
+        return self._R
 
     def inverse(self, z: np.ndarray, own: np.ndarray, sigma_speed: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-        """One-point initiation from z = [β, r, ṙ]: position o + r u(β), velocity
-        ẋ_o + ṙ u + 0·t with the unobserved tangential speed ~ N(0, σ_speed²) (m/s); the
-        covariance linearises the polar noise.
+        """One-point initiation in world coordinates from z = [β, r, ṙ] seen by the observer
+        ``own`` [x, y, ẋ, ẏ]: position o + r u(β), velocity ẋ_o + ṙ u + 0·t with the
+        unobserved tangential speed ~ N(0, σ_speed²) (m/s); the covariance linearises the
+        polar noise.
 
         Returns
         -------
@@ -109,6 +124,3 @@ class BearingRangeRate:
         P[2:, 2:] = self.sigma_range_rate ** 2 * np.outer(u, u) \
             + float(sigma_speed) ** 2 * np.outer(tn, tn)
         return x, P
-
-
-__all__ = ["BearingRangeRate"]

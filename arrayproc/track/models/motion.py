@@ -30,19 +30,55 @@ def _nonneg(v: float) -> str | None:
 
 class ConstantVelocity(MotionModel):
     """Constant velocity, L-R paper eqs. (2)-(4): ``q1`` (m²/s³) is the acceleration noise
-    intensity q̄1 of eq. (4)."""
+    intensity q̄1 of eq. (4).
+
+    ``axes`` is the number of position axes: state [positions…, velocities…] (2: the relative
+    state [x, y, ẋ, ẏ] of eq. (1); 1 or 3 for stacked tracks of a bearing or a 3-D position).
+    The one-track form (``function_points``, ``jacobian``, ``covariance``) has 2 axes; the
+    stacked form (:meth:`transition_stacked`, :meth:`covariance_stacked`, stacked tracks in
+    world coordinates) any number: F = [[I, T I], [0, I]],
+    Q = q̄1 [[T³/3 I, T²/2 I], [T²/2 I, T I]] (eqs. (2), (4); Bar-Shalom, Li & Kirubarajan
+    2001 eq. 6.2.2-12).
+    """
 
     name = "cv"
-    ndim = 4
     linear = True
     params = {"q1": Param("float", Q1_PAPER, "acceleration noise intensity, m²/s³",
-                          check=_nonneg)}
+                          check=_nonneg),
+              "axes": Param("int", 2, "position axes (state [positions, velocities])",
+                            check=lambda v: None if v >= 1 else "must be >= 1")}
+
+    @property
+    def ndim(self) -> int:  # type: ignore[override]
+        return 2 * self.axes
 
     @property
     def q2(self) -> float:
         return 0.0
 
+    def transition_stacked(self, dt: np.ndarray) -> np.ndarray:
+        """F (n, d, d) for time steps ``dt`` (n,) s (eq. (2))."""
+        dt = np.asarray(dt, float).reshape(-1)
+        k = self.axes
+        F = np.broadcast_to(np.eye(2 * k), (dt.size, 2 * k, 2 * k)).copy()
+        F[:, :k, k:] = dt[:, None, None] * np.eye(k)
+        return F
+
+    def covariance_stacked(self, dt: np.ndarray) -> np.ndarray:
+        """Q (n, d, d) for time steps ``dt`` (n,) s (eq. (4))."""
+        dt = np.asarray(dt, float).reshape(-1)
+        k = self.axes
+        eye = np.eye(k)
+        Q = np.empty((dt.size, 2 * k, 2 * k))
+        Q[:, :k, :k] = (dt ** 3 / 3.0)[:, None, None] * eye
+        Q[:, :k, k:] = (dt ** 2 / 2.0)[:, None, None] * eye
+        Q[:, k:, :k] = Q[:, :k, k:]
+        Q[:, k:, k:] = dt[:, None, None] * eye
+        return self.q1 * Q
+
     def function_points(self, X, dt, ctx, out) -> None:
+        if self.axes != 2:
+            raise ConfigError("cv: the one-track (relative-state) form has axes = 2")
         km.cv_propagate_points(X, float(dt), ctx.own_prev, ctx.own, out)
 
     def jacobian(self, x: np.ndarray, dt: float, ctx: Context | None = None) -> np.ndarray:

@@ -23,7 +23,7 @@ from arrayproc.track.base import Param
 from arrayproc.track.models.base import MeasurementModel
 from arrayproc.track.state import Context
 
-__all__ = ["TDOA"]
+__all__ = ["TDOA", "RowTDOA"]
 
 
 class TDOA(MeasurementModel):
@@ -69,3 +69,21 @@ class TDOA(MeasurementModel):
 
     def covariance(self, ctx: Context | None = None) -> np.ndarray:
         return self._R
+
+
+class RowTDOA(TDOA):
+    """:class:`~arrayproc.track.models.tdoa.TDOA` with a σ per delay (``sigma_row``, the
+    non-reference delays in element order), the noise covariance of delays measured against
+    one reference channel (:func:`arrayproc.geo.tdoa.reference_covariance`)."""
+
+    name = "tdoa_row"
+    params = {"sigma_row": Param("any", None, "σ of each non-reference delay, s")}
+
+    def _setup(self) -> None:
+        super()._setup()
+        if self.sigma_row is not None:
+            s = np.asarray(self.sigma_row, float).reshape(-1)
+            if s.size != self._keep.size or not np.all(np.isfinite(s) & (s > 0)):
+                raise ConfigError(f"{self.name}.sigma_row: need {self._keep.size} positive "
+                                  "finite values")
+            self._R = geo_tdoa.reference_covariance(s)

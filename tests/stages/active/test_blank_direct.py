@@ -107,7 +107,7 @@ def contacts(rec_path, out_path, blank: str) -> dict:
 
 
 def test_near_scatterer_found_only_with_blanking(tmp_path):
-    from arrayproc.plots._active import echo_truth
+    from arrayproc.io.truth import echo_truth
     path = simulate_to(tmp_path, rock=True)
     with Recording(path) as rec:
         tr = echo_truth(rec)

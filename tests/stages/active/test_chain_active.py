@@ -78,7 +78,7 @@ def run(rec_path, out_path, extra: str = "") -> dict:
 
 
 def truth(rec_path) -> dict:
-    from arrayproc.plots._active import echo_truth
+    from arrayproc.io.truth import echo_truth
     with Recording(rec_path) as rec:
         return echo_truth(rec)
 

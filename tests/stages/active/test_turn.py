@@ -119,7 +119,7 @@ def test_rock_is_still_in_the_turn(turning):
     assert not bool(con["moving"][j])
     # against the simulator's truth range rate of the echo (two legs, projector rigidly
     # offset on the turning platform): the starboard own closing removes it
-    from arrayproc.plots._active import echo_truth
+    from arrayproc.io.truth import echo_truth
     with Recording(rec_path) as rec:
         tr = echo_truth(rec)
     r_true = float(tr["range_rate_mps"][0])

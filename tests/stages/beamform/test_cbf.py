@@ -10,9 +10,12 @@ from hypothesis import strategies as st
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.chain.memory import array_blocks
 from arrayproc.dsp.windows import time_taper as time_window
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.thesis_passive import array_gain_db, cbf_pattern, run_cbf
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.plane_wave import tonal_plane_wave
 from arrayproc.stages.beamform import _kernels as kb
 from arrayproc.stages.beamform.cbf import CBF, beam_power_reference
 from arrayproc.stages.passive import _kernels as kp
@@ -20,62 +23,14 @@ from arrayproc.stages.passive import _kernels as kp
 C = 1500.0
 
 
-def plane_wave(n: int, fs: float, positions: np.ndarray, cone_deg: float, freq: float,
-               amp: float = 1.0, phase: float = 0.3) -> np.ndarray:
-    """Exact tonal plane wave from cone angle θ0: x_n(t) = A cos(2π f (t + x_n cos θ0 / c) + φ).
-
-    The element nearer the source (larger x·cos θ0) receives the wavefront earlier (thesis
-    eq. 2.10 without motion).
-    """
-    t = np.arange(n) / fs
-    tau = positions[:, 0] * np.cos(np.deg2rad(cone_deg)) / C
-    return amp * np.cos(2 * np.pi * freq * (t[:, None] + tau[None, :]) + phase)
-
-
-def blocks_of(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,)):
-    i, k = 0, 0
-    while i < x.shape[0]:
-        s = min(sizes[k % len(sizes)], x.shape[0] - i)
-        yield Block(x[i:i + s].astype(np.float32), Domain.TIME, i / fs, s / fs, fs,
-                    positions, None, meta=TimeMeta(i, s))
-        i += s
-        k += 1
-
-
-def run_cbf(x: np.ndarray, fs: float, positions: np.ndarray, sizes=(8192,), **kw):
-    stage = CBF(**kw)
-    out = list(stage.process(blocks_of(x, fs, positions, sizes)))
-    return stage, np.concatenate([o.data for o in out]), out
-
-
-def i_nh(theta_deg: np.ndarray, theta0_deg: float, f: float, n: int, dx: float) -> np.ndarray:
-    """Thesis eq. (2.13): I_NH(θ, θ0, f) = (1 − e^{jψN}) / (1 − e^{jψ}), ψ = 2π f δx/c (cos θ −
-    cos θ0); its limit N_H where ψ → 0."""
-    psi = 2 * np.pi * f * dx / C * (np.cos(np.deg2rad(theta_deg)) - np.cos(np.deg2rad(theta0_deg)))
-    out = np.full(psi.shape, complex(n))
-    m = np.abs(np.exp(1j * psi) - 1) > 1e-12
-    out[m] = (1 - np.exp(1j * psi[m] * n)) / (1 - np.exp(1j * psi[m]))
-    return out
-
-
 # -- the beam pattern, eq. (2.13) -------------------------------------------------------------
 @pytest.mark.parametrize("theta0", [90.0, 60.0, 125.0])
 def test_beam_pattern_matches_eq_2_13(theta0):
-    fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
-    f0 = 250 * fs / nfft  # on a bin: the DFT of the tone is exactly A·N_DFT/2 there
-    pos = line_array(n_h, dx)
-    # Main lobe and the first sidelobe on each side: up to the second nulls of eq. (2.13),
-    # cos θ = cos θ0 ± 2 c / (f N δx).
-    du = 2 * C / (f0 * n_h * dx)
-    u0 = np.cos(np.deg2rad(theta0))
-    lo = np.rad2deg(np.arccos(min(1.0, u0 + du)))
-    hi = np.rad2deg(np.arccos(max(-1.0, u0 - du)))
-    x = plane_wave(nfft, fs, pos, theta0, f0, amp=2.0)
-    stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
-                          band=[f0 - 1, f0 + 1], beams={"start": lo, "stop": hi, "count": 801})
+    """Main lobe and first sidelobes (thesis_passive.cbf_pattern: 32 hydrophones 0.75 m apart,
+    f0 = 1000 Hz on a bin) against |I_NH|²."""
+    f0, n_h = 1000.0, 32
+    stage, got, want = cbf_pattern(theta0)
     assert stage.freqs.size == 1 and abs(stage.freqs[0] - f0) < 1e-9
-    got = np.abs(y[0, 0]) ** 2 / (2.0 * nfft / 2) ** 2  # |Y|² / (A N_DFT / 2)²
-    want = np.abs(i_nh(stage.beam_axis, theta0, f0, n_h, dx)) ** 2
     keep = want > want.max() * 10 ** (-40 / 10)  # away from the exact nulls
     err_db = 10 * np.log10(got[keep] / want[keep])
     assert np.max(np.abs(err_db)) < 0.1, np.max(np.abs(err_db))
@@ -88,7 +43,7 @@ def test_3db_beamwidth_matches_eq_2_41(theta0):
     fs, nfft, n_h, dx = 5120.0, 1024, 64, 0.36
     f0 = 200 * fs / nfft  # 1000 Hz
     pos = line_array(n_h, dx)
-    x = plane_wave(nfft, fs, pos, theta0, f0)
+    x = tonal_plane_wave(nfft, fs, pos, theta0, f0, c=C)
     stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
                           band=[f0 - 1, f0 + 1],
                           beams={"start": theta0 - 4, "stop": theta0 + 4, "count": 1601})
@@ -112,32 +67,18 @@ def test_3db_beamwidth_matches_eq_2_41(theta0):
 
 
 def test_array_gain_is_n_h(rng):
-    """White noise vs plane wave: SNR gain at the steered beam = 10 log10 N_H (thesis 2.1.1)."""
+    """White noise vs plane wave: SNR gain at the steered beam = 10 log10 N_H (thesis 2.1.1;
+    the set-up of ``thesis_passive.array_gain_db``)."""
     fs, nfft, n_h, dx = 2048.0, 512, 32, 0.75
     pos = line_array(n_h, dx)
     f0 = 150 * fs / nfft
-    theta0 = 70.0
-    n = nfft * 200
-    noise = rng.standard_normal((n, n_h))
-    sig = plane_wave(n, fs, pos, theta0, f0, amp=0.05)
-    kw = dict(nfft=nfft, hop=nfft, window="hann", band=[f0 - 40, f0 + 40],
-              beams={"start": theta0, "stop": theta0, "count": 1})
-    _, yn, _ = run_cbf(noise, fs, pos, **kw)
-    st_s, ys, _ = run_cbf(sig, fs, pos, **kw)
-    # per-hydrophone reference: the same DFTs without beamforming
-    w = time_window("hann", nfft)
-    xn = np.fft.rfft(noise.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
-    xs = np.fft.rfft(sig.reshape(-1, nfft, n_h) * w[None, :, None], axis=1)
-    fb = np.fft.rfftfreq(nfft, 1 / fs)
-    sel = (fb >= f0 - 40) & (fb <= f0 + 40)
-    kf = int(np.argmin(np.abs(st_s.freqs - f0)))
-    ks = int(np.argmin(np.abs(fb[sel] - f0)))
-    snr_in = np.mean(np.abs(xs[:, sel][:, ks]) ** 2) / np.mean(np.abs(xn[:, sel]) ** 2)
-    snr_out = np.mean(np.abs(ys[:, kf, 0]) ** 2) / np.mean(np.abs(yn[:, :, 0]) ** 2)
-    gain_db = 10 * np.log10(snr_out / snr_in)
+    gain_db = array_gain_db(rng)
     assert abs(gain_db - 10 * np.log10(n_h)) < 0.3, gain_db
+    noise = rng.standard_normal((nfft * 200, n_h))
+    kw = dict(nfft=nfft, hop=nfft, band=[f0 - 40, f0 + 40],
+              beams={"start": 70.0, "stop": 70.0, "count": 1})
     # and the noise output variance is N_DFT N_H σ² (thesis 2.1.1.1) for a rectangular window
-    _, yr, _ = run_cbf(noise, fs, pos, **{**kw, "window": "none"})
+    _, yr, _ = run_cbf(noise, fs, pos, window="none", **kw)
     assert abs(np.mean(np.abs(yr) ** 2) / (nfft * n_h) - 1) < 0.03
 
 
@@ -294,7 +235,7 @@ def test_shading_lowers_sidelobes_as_asked():
     fs, nfft, n_h, dx = 4096.0, 1024, 32, 0.75
     f0 = 250 * fs / nfft
     pos = line_array(n_h, dx)
-    x = plane_wave(nfft, fs, pos, 90.0, f0)
+    x = tonal_plane_wave(nfft, fs, pos, 90.0, f0, c=C)
     for kind, sll in (("chebyshev", 35.0), ("taylor", 30.0)):
         stage, y, _ = run_cbf(x, fs, pos, nfft=nfft, hop=nfft, window="none",
                               band=[f0 - 1, f0 + 1],
@@ -524,8 +465,8 @@ def test_frames_do_not_depend_on_how_the_stream_is_cut(sizes, hop, batch, seed):
     x = g.standard_normal((1500, n_h)).astype(np.float32)
     stage = CBF(nfft=256, hop=hop, window="hann", band=[100.0, 700.0], batch=batch)
     whole = np.concatenate([o.data.copy() for o in stage.process(
-        blocks_of(x, fs, pos, (x.shape[0],)))])
-    blocks = list(blocks_of(x, fs, pos, tuple(sizes)))
+        array_blocks(x, fs, pos, (x.shape[0],)))])
+    blocks = list(array_blocks(x, fs, pos, tuple(sizes)))
     copies = [b.data.copy() for b in blocks]
     cut = np.concatenate([o.data for o in stage.process(iter(blocks))])
     np.testing.assert_array_equal(cut, whole)

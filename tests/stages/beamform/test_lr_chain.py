@@ -10,6 +10,8 @@ import numpy as np
 from arrayproc.chain import build_chain, run_chain
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
+from arrayproc.io.truth import relative_bearings
+from arrayproc.plots.btr import plot_btr
 from arrayproc.sim.run import simulate_file
 from tests.conftest import chain_toml
 
@@ -67,3 +69,10 @@ def test_triplet_source_resolved_to_its_side(tmp_path):
     assert np.all(np.abs(b["rel_bearing_deg"] - rel) < 1.0)
     assert np.all(np.abs(b["bearing_stbd_deg"] - 90.0) < 1.0)
     assert np.array_equal(b["bearing_port_deg"], b["bearing_stbd_deg"])
+    with Recording(rec_path) as rec:  # the truth on the same axis, for the BTR plot
+        truth = relative_bearings(rec, btr["time"])["target"]
+    assert np.all(np.abs(truth - rel) < 0.1)
+    assert btr["attrs"]["beam_mode"] == "lr"
+    png = tmp_path / "btr.png"
+    plot_btr(str(prod), str(png))
+    assert png.stat().st_size > 10_000

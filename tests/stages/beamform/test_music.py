@@ -19,9 +19,9 @@ N, DX = 32, 0.75
 
 
 def stochastic_crb(pos, f, cones, snr_db, snapshots):
-    """Stochastic (unconditional) CRB of the cone angles, rad² (Stoica & Nehorai 1990,
-    eq. 2.13): σ²/(2K) {Re[(D^H Π⊥ D) ⊙ (P A^H R⁻¹ A P)ᵀ]}⁻¹, uncorrelated sources of power
-    P = SNR·σ², σ² = 1."""
+    """Stochastic (unconditional) CRB of the cone angles, rad² (Stoica & Nehorai 1990):
+    σ²/(2K) {Re[(D^H Π⊥ D) ⊙ (P A^H R⁻¹ A P)ᵀ]}⁻¹, uncorrelated sources of power P = SNR·σ²,
+    σ² = 1."""
     fr = np.array([f])
     a = np.stack([steer(pos, c, fr)[0] for c in cones], 1)  # (C, M)
     x = pos[:, 0] - pos[:, 0].mean()

@@ -8,34 +8,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import signal
 
-from arrayproc.chain.block import Block
-from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.chain.memory import array_blocks, run_stage
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.thesis_passive import dense_response
 from arrayproc.stages.condition.dft_filter import DFTFilter, tukey_band
 
 
-def blocks_of(x: np.ndarray, fs: float, sizes, s0: int = 0):
-    i, k = 0, 0
-    while i < x.shape[0]:
-        n = min(sizes[k % len(sizes)], x.shape[0] - i)
-        yield Block(x[i:i + n].astype(np.float32), Domain.TIME, (s0 + i) / fs, n / fs,
-                    fs, np.zeros((x.shape[1], 3)), None,
-                    meta=TimeMeta(s0 + i, n))
-        i += n
-        k += 1
-
-
 def run(stage: DFTFilter, x: np.ndarray, fs: float, sizes, s0: int = 0):
-    out = list(stage.process(blocks_of(x, fs, sizes, s0)))
-    return np.concatenate([o.data for o in out]), out
-
-
-def dense_response(taps: np.ndarray, fs: float, n: int = 1 << 18):
-    """|H(f)| of centred taps on a dense grid, computed here independently of the stage."""
-    half = (taps.size - 1) // 2
-    h = np.zeros(n, complex)
-    h[np.arange(-half, half + 1) % n] = taps
-    return np.fft.fftfreq(n, 1 / fs), np.abs(np.fft.fft(h))
+    return run_stage(stage, x, fs, None, sizes, s0)
 
 
 @pytest.mark.parametrize("band,alpha,cx", [((100.0, 2000.0), 0.1, False),
@@ -117,14 +97,14 @@ def test_tones_in_passband_pass_and_out_of_band_tones_are_rejected():
 def test_config_errors_name_the_key():
     with pytest.raises(ConfigError, match="'decimate'"):
         list(DFTFilter(band=[100.0, 900.0], decimate=4).process(
-            blocks_of(np.zeros((4096, 1)), 2048.0, (4096,))))
+            array_blocks(np.zeros((4096, 1)), 2048.0, None, (4096,))))
     with pytest.raises(ConfigError, match="'taper'"):
         DFTFilter(band=[1.0, 2.0], taper=1.5)
     with pytest.raises(ConfigError, match="'band'"):
         DFTFilter(band=[10.0, 5.0])
     with pytest.raises(ConfigError, match="'band'"):
         list(DFTFilter(band=[100.0, 3000.0]).process(
-            blocks_of(np.zeros((4096, 1)), 2048.0, (4096,))))
+            array_blocks(np.zeros((4096, 1)), 2048.0, None, (4096,))))
 
 
 @pytest.mark.parametrize("decimate,cx,band", [(1, False, [100.0, 2000.0]),

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from arrayproc.chain import RunContext
-from arrayproc.chain.block import Block
-from arrayproc.chain.domains import Domain, TimeMeta
+from arrayproc.chain.memory import array_blocks
 from arrayproc.dsp.peaks import parabolic_vertex, pick_peaks
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.io.products import ProductsWriter, read_products
+from arrayproc.sim.plane_wave import broadband_plane_waves, tonal_plane_wave
 from arrayproc.stages.beamform.cbf import CBF
 from arrayproc.stages.passive.bearings import Bearings
 from arrayproc.stages.passive.integrate import Integrate
@@ -41,19 +41,6 @@ def test_pick_peaks_threshold_separation_order():
     assert pick_peaks(y, axis, 20.0, 1.0) == []
 
 
-def broadband_plane_waves(n, fs, pos, cones, amps, rng):
-    """Independent white-noise sources arriving as plane waves from cone angles, applied
-    exactly with a frequency-domain delay (circular over the whole record)."""
-    f = np.fft.rfftfreq(n, 1 / fs)
-    x = np.zeros((n, pos.shape[0]))
-    for cone, a in zip(cones, amps):
-        s = np.fft.rfft(a * rng.standard_normal(n))
-        tau = pos[:, 0] * np.cos(np.deg2rad(cone)) / C
-        x += np.fft.irfft(s[:, None] * np.exp(2j * np.pi * f[:, None] * tau[None, :]), n,
-                          axis=0)
-    return x
-
-
 def run_bearings(x, fs, pos, heading, tmp_path, **kw):
     cbf = CBF(nfft=512, hop=256, window="hann", band=[200.0, 900.0],
               beams={"start": 0.0, "stop": 180.0, "count": 181})
@@ -62,11 +49,7 @@ def run_bearings(x, fs, pos, heading, tmp_path, **kw):
     out = tmp_path / "b.h5"
     with ProductsWriter(out) as w:
         brg.bind(RunContext(products=w))
-        blocks = []
-        for i in range(0, x.shape[0], 4096):
-            n = min(4096, x.shape[0] - i)
-            blocks.append(Block(x[i:i + n].astype(np.float32), Domain.TIME, i / fs,
-                                n / fs, fs, pos, None, meta=TimeMeta(i, n)))
+        blocks = list(array_blocks(x, fs, pos, (4096,)))
 
         def with_heading(bs):
             for b in bs:  # no recording: give the headings the chain would take from /nav
@@ -79,7 +62,7 @@ def run_bearings(x, fs, pos, heading, tmp_path, **kw):
 def test_broadband_bearings_and_left_right_pair(tmp_path, rng):
     fs, n_h = 2048.0, 32
     pos = line_array(n_h, 0.75)
-    x = broadband_plane_waves(1 << 16, fs, pos, [70.3, 118.6], [0.5, 0.35], rng)
+    x = broadband_plane_waves(1 << 16, fs, pos, [70.3, 118.6], [0.5, 0.35], rng, C)
     x += 1.0 * rng.standard_normal(x.shape)  # −6 and −9 dB per hydrophone
     rows = run_bearings(x, fs, pos, 30.0, tmp_path, threshold_db=3.0, min_separation=5.0)
     n_t = np.unique(rows["time"]).size
@@ -97,9 +80,7 @@ def test_line_bearings(tmp_path, rng):
     fs, n_h = 2048.0, 32
     pos = line_array(n_h, 0.75)
     n = 1 << 16
-    t = np.arange(n) / fs
-    tau = pos[:, 0] * np.cos(np.deg2rad(101.7)) / C
-    x = 0.2 * np.cos(2 * np.pi * 612.0 * (t[:, None] + tau[None, :]))
+    x = tonal_plane_wave(n, fs, pos, 101.7, 612.0, amp=0.2, phase=0.0, c=C)
     x += rng.standard_normal(x.shape)
     rows = run_bearings(x, fs, pos, 0.0, tmp_path, broadband=False, lines=True,
                         line_threshold_db=10.0)

@@ -14,6 +14,7 @@ from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording, RecordingWriter
 from arrayproc.io.truth import cone_angles, tonal_frequencies
 from arrayproc.plots import plot_file
+from arrayproc.sim.plane_wave import tonal_plane_wave
 from arrayproc.stages.passive.btr import BTR
 from arrayproc.stages.passive.lofar import LOFAR
 from tests.conftest import cbf_stage, chain_toml
@@ -96,10 +97,9 @@ def write_truth_recording(path, fs=2048.0, n_h=32, dx=0.75, dur=24.0, seed=3):
     r = np.random.default_rng(seed)
     pos = line_array(n_h, dx)
     n = int(dur * fs)
-    t = np.arange(n) / fs
     src_xy = np.array([2000.0 * np.sin(np.deg2rad(60.0)), 2000.0 * np.cos(np.deg2rad(60.0))])
-    tau = pos[:, 0] * np.cos(np.deg2rad(60.0)) / C  # cone 60°: bearing 60° from north
-    x = 0.3 * np.cos(2 * np.pi * 300.0 * (t[:, None] + tau[None, :]))
+    # cone 60°: bearing 60° from north
+    x = tonal_plane_wave(n, fs, pos, 60.0, 300.0, amp=0.3, phase=0.0, c=C)
     x += 0.5 * r.standard_normal((n, n_h))
     with RecordingWriter(path, fs, n_h, positions=pos) as w:
         w.append(x.astype(np.float32))

@@ -9,6 +9,7 @@ from scipy import stats
 from arrayproc.chain import build_chain
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta, TimeMeta
+from arrayproc.chain.memory import array_blocks
 from arrayproc.errors import ConfigError
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.cbf import CBF
@@ -96,9 +97,7 @@ def test_noise_after_integration_is_gamma_n_b(n_b):
     cbf = CBF(nfft=nfft, hop=nfft, window="none", band=[8.0, 500.0],
               beams={"start": 75.0, "stop": 75.0, "count": 1})
     integ = Integrate(snapshots=n_b, mode="blockwise")
-    blocks = (Block(x[i:i + 4096].astype(np.float32), Domain.TIME, i / fs, 4096 / fs,
-                    fs, pos, None, meta=TimeMeta(i, 4096))
-              for i in range(0, x.shape[0], 4096))
+    blocks = array_blocks(x, fs, pos, (4096,))
     out = np.concatenate([o.data for o in integ.process(cbf.process(blocks))])
     assert out.shape[0] == n_out
     scale = nfft * n_h * sigma**2

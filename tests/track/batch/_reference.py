@@ -1,5 +1,5 @@
 """Plain numpy implementations of the batch-TMA objectives (the references of the numba
-kernels; also used by scripts/bench_tma.py's equivalents)."""
+kernels; the TMA benchmark script times its own equivalents)."""
 
 from __future__ import annotations
 

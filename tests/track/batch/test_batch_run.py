@@ -134,7 +134,11 @@ def test_run_windows(tmp_path):
     sols = run_tma(str(prod), _cfg(tmp_path, 'method = "bearings"\nwindow = 300.0\n'
                                    'step = 300.0\nsigma_bearing_deg = 0.05\n'),
                    str(tmp_path / "w.h5"))
-    assert [(s.t0, s.t1) for s in sols] == [(0.0, 300.0), (300.0, 600.0)]
+    # each window is one straight leg (the turn is at 300 s): the side is not resolved, so
+    # each preferred solution is followed by its mirror
+    preferred = [s for s in sols if all(s is not o.mirror for o in sols)]
+    assert [(s.t0, s.t1) for s in preferred] == [(0.0, 300.0), (300.0, 600.0)]
+    assert [s.mirror for s in preferred] == [sols[1], sols[3]]
 
 
 def test_config_errors(tmp_path):
@@ -159,3 +163,34 @@ def test_missing_group(tmp_path):
         w.group("power", "power")
     with pytest.raises(FormatError, match="no bearings group"):
         run_tma(str(prod), _cfg(tmp_path, 'method = "bearings"\n'), str(tmp_path / "o.h5"))
+
+
+def test_unresolved_side_writes_both_mirror_solutions(tmp_path):
+    """A straight leg (no manoeuvre): the cone angles are the same for the source and its
+    mirror, so both solutions are written, the preferred first, with one warning each."""
+    tr = S.parallel_track(duration=300.0, dt=10.0)
+    rec = _recording(tmp_path / "rec.h5", S.parallel_track(duration=300.0, dt=1.0))
+    src = np.array([1500.0, 1000.0, -2.0, 1.0])
+    with Recording(rec) as r:
+        centre = np.stack([p.elements[:, :2].mean(0) for p in r.poses(tr.time)])
+    d = src[None, :2] + tr.time[:, None] * src[None, 2:] - centre
+    cone = np.abs(np.arctan2(d[:, 0], d[:, 1]) - tr.heading)
+    cone += np.random.default_rng(2).normal(0, np.deg2rad(0.2), cone.size)
+    prod = tmp_path / "prod.h5"
+    with ProductsWriter(prod, source=str(rec)) as w:
+        w.group("bearings", "bearings").append(
+            time=tr.time, cone_deg=np.rad2deg(cone),
+            bearing_port_deg=np.rad2deg(tr.heading - cone) % 360,
+            bearing_stbd_deg=np.rad2deg(tr.heading + cone) % 360,
+            level_db=np.full(tr.time.size, 90.0), snr_db=np.full(tr.time.size, 20.0),
+            freq_lo=np.full(tr.time.size, 100.0), freq_hi=np.full(tr.time.size, 900.0),
+            spl_db=np.full(tr.time.size, 90.0))
+    cfg = _cfg(tmp_path, 'method = "bearings"\nsigma_bearing_deg = 0.2\ncone_gate = [0.0, 180.0]\n'
+               'array_motion = false\nretarded_time = false\n')
+    with pytest.warns(UserWarning, match="has not resolved the side"):
+        sols = run_tma(str(prod), cfg, str(tmp_path / "tma.h5"))
+    assert len(sols) == 2 and sols[1] is sols[0].mirror
+    g = read_products(tmp_path / "tma.h5")["tma"]
+    np.testing.assert_array_equal(g["preferred"], [1, 0])
+    assert {sols[0].side, sols[1].side} == {"port", "starboard"}
+    assert abs(g["cost_mirror"][0] - g["cost"][1]) < 1e-9 * max(1.0, g["cost"][1])

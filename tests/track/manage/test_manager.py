@@ -5,19 +5,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from arrayproc.track.filters.stacked import StackedEKF
 from arrayproc.track.manage.delete import DeletionRule
-from arrayproc.track.manage.gaussian import ConstantVelocity, KalmanBatch
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.manager import TrackManager
 from arrayproc.track.manage.tracks import Status
+from arrayproc.track.models.motion import ConstantVelocity
+from arrayproc.track.models.position import Position
 
 from .conftest import simulate_cv
 
-H = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
-
 
 def _manager(association: str = "gnn", sigma: float = 5.0) -> TrackManager:
-    filt = KalmanBatch(ConstantVelocity(2, 0.05), H, sigma ** 2 * np.eye(2))
+    filt = StackedEKF(ConstantVelocity(q1=0.05, axes=2), Position(axes=2, sigma=sigma))
 
     def init(Z, t, ctx, j):
         return np.r_[Z[j], 0.0, 0.0], np.diag([sigma ** 2, sigma ** 2, 100.0, 100.0])
@@ -70,7 +70,7 @@ def test_coasting_then_deletion():
 
 
 def test_duplicate_tracks_are_merged():
-    filt = KalmanBatch(ConstantVelocity(2, 0.05), H, 25.0 * np.eye(2))
+    filt = StackedEKF(ConstantVelocity(q1=0.05, axes=2), Position(axes=2, sigma=5.0))
     mgr = TrackManager(filt, lambda Z, t, c, j: (np.r_[Z[j], 0, 0], np.diag([25, 25, 100, 100.])),
                        confirm=MofN(1, 1), delete=DeletionRule(max_misses=3, pos=(0, 1),
                                                               merge_d2=9.0, merge_scans=2))

@@ -13,10 +13,11 @@ from arrayproc.errors import ConfigError
 from arrayproc.evaluate.metrics import evaluate_tracks_file
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import RecordingWriter
-from arrayproc.track.manage.mirrored import MirroredBearingBatch
+from arrayproc.track.manage.mirrored import mirrored_bank, mirrored_cone, mirrored_initial
 from arrayproc.track.manage.tracks import status_names
 from arrayproc.track.multi import bearing_scans, split_config
 from arrayproc.track.runner import run_tracker
+from arrayproc.track.state import Context
 
 CFG = """
 [tracker]
@@ -128,41 +129,41 @@ def test_mirrored_hypotheses_coast_through_a_turn():
     updates, then 15 coasted scans while the array turns 30°; the starboard hypothesis still
     predicts the true bearing (its cone has moved by the turn), so the target's next
     measurement falls inside its gate."""
-    f = MirroredBearingBatch(q=0.002, sigma_cone_deg=0.5)
+    f = mirrored_bank(q=0.002, sigma_cone_deg=0.5)
     h, b = 330.0, 30.0
 
     def z(h):
         cone = abs((b - h + 180) % 360 - 180)
         return np.array([[cone, (h - cone) % 360, (h + cone) % 360]])
 
-    x, P = MirroredBearingBatch.initial(z(h), 0, 0.5, 0.2, 0.5)
-    X, P = x[None], P[None]
+    x, P, w = mirrored_initial(z(h), 0, 0.5, 0.2, 0.5)
+    X, P, W = x[None], P[None], w[None]
     for _ in range(20):
-        X, P = f.predict(X, P, np.array([2.0]), 1.0)
-        X, P, _ = f.update(X, P, z(h), None, np.array([0]))
+        X, P = f.predict(X, P, np.array([2.0]), Context(np.zeros(4)))
+        X, P, _, W = f.update(X, P, z(h), None, np.array([0]), W)
     for _ in range(15):  # coasting through a 2°/s turn
         h += 2.0
-        X, P = f.predict(X, P, np.array([2.0]), 1.0 + 4.0)
-    nu, S = f.innovation(X, P, z(h))
+        X, P = f.predict(X, P, np.array([2.0]), Context(np.zeros(4), q_scale=1.0 + 4.0))
+    nu, S = f.innovation(X, P, z(h), None, W)
     assert nu[0, 0, 0] ** 2 / S[0, 0, 0, 0] < 9.0
-    cone, _, _ = MirroredBearingBatch.cone(X, P, np.array([h]))
+    cone, _, _ = mirrored_cone(f, X, P, W, np.array([h]))
     assert X[0, 0] == pytest.approx(b, abs=1.0)
 
 
 def test_mirrored_filter_weights_and_cone():
-    f = MirroredBearingBatch(q=0.002, sigma_cone_deg=0.5)
+    f = mirrored_bank(q=0.002, sigma_cone_deg=0.5)
     Z = np.array([[60.0, 30.0, 150.0]])  # heading 90: port 30, starboard 150
-    x, P = MirroredBearingBatch.initial(Z, 0, 0.5, 0.2, 0.5)
-    X, P = x[None], P[None]
+    x, P, w = mirrored_initial(Z, 0, 0.5, 0.2, 0.5)
+    X, P, W = x[None], P[None], w[None]
     # after a turn to heading 120 the target (truly to starboard, bearing 150) is at cone 30:
     # starboard member 150, port member 90
-    X, P = f.predict(X, P, np.array([10.0]), 1.0)
-    X, P, _ = f.update(X, P, np.array([[30.0, 90.0, 150.0]]), None, np.array([0]))
-    w = np.exp(X[0, 4:6])
+    X, P = f.predict(X, P, np.array([10.0]), Context(np.zeros(4)))
+    X, P, _, W = f.update(X, P, np.array([[30.0, 90.0, 150.0]]), None, np.array([0]), W)
+    w = np.exp(W[0])
     assert w[0] > 0.99 and abs(w.sum() - 1) < 1e-8  # ghost floored at 1e-9
-    cone, sig, ws = MirroredBearingBatch.cone(X, P, np.array([120.0]))
+    cone, sig, ws = mirrored_cone(f, X, P, W, np.array([120.0]))
     assert cone[0] == pytest.approx(30.0, abs=0.5) and ws[0] > 0.99 and sig[0] < 1.0
-    nu, S = f.innovation(X, P, np.array([[31.0, 89.0, 151.0]]))
+    nu, S = f.innovation(X, P, np.array([[31.0, 89.0, 151.0]]), None, W)
     assert nu.shape == (1, 1, 1) and nu[0, 0, 0] == pytest.approx(151.0 - X[0, 0])
 
 

@@ -12,6 +12,7 @@ import pytest
 from arrayproc.track.manage.initiate import MofN
 from arrayproc.track.manage.tracks import Status
 from arrayproc.track.multi import contact_scans, contacts_manager
+from arrayproc.track.state import Context
 
 pytest.importorskip("stonesoup")
 
@@ -45,7 +46,7 @@ def test_two_targets_agree_with_stonesoup(tmp_path):
                                                  "bearing_stbd_deg", "range_rate_mps")}
     cols["ping"] = np.asarray(c["ping"], np.int64)   # one scan per ping, as `arrayproc track`
     for t, Z, _rows, own in contact_scans(cols, nav, True):
-        mgr.step(t, Z, own)
+        mgr.step(t, Z, Context(own))
     ours = sorted((tr for tr in mgr.tracks if tr.status is Status.CONFIRMED),
                   key=lambda tr: tr.x[0])
     assert len(ours) == 2

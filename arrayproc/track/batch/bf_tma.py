@@ -1,0 +1,191 @@
+"""Bearings + frequency batch TMA: narrowband towed-array TMA with an unknown rest frequency.
+
+The source moves at constant velocity over the window (thesis eq. (3.41)) and radiates a tonal
+of unknown rest frequency ``f0``; the array measures, at each time ``t_b``, the bearing of
+eq. (3.44) (or, on a line array, its cone angle ``|wrap(h_b − ψ_b)|``, :func:`.bo_tma.cone_model`)
+and the received frequency
+
+    f_b = f0 (1 − ṙ_b / c),    ṙ_b = d_b · (v − v_o,b) / |d_b|                    (BF1)
+
+(first-order Doppler; ``d_b`` the source minus the observer, ``v`` the source's and ``v_o,b``
+the observer's velocity; ``ṙ`` opening positive). The unknowns are ``[x, y, ẋ, ẏ, f0]``
+(thesis section 3.4; table 3.1's refs [71, 73]). Gaussian errors of σ_θ and σ_f give the
+weighted least-squares cost
+
+    C(x, f0) = Σ_b (θ_b − h_b(x))² / σ_θ² + Σ_b (f_b − f0 g_b(x))² / σ_f²,   g_b = 1 − ṙ_b / c
+
+which is quadratic in ``f0``: for each kinematic state its minimum is at
+``f0 = Σ g f / Σ g²`` (BF2), so the global search (differential evolution over the same
+bearing/range coordinates as the bearings-only solver, numba population kernel
+:func:`._kernels.bf_cost_population`) runs on the four kinematic parameters only, and the
+least-squares polish on all five. The Fisher information is ``Jᵀ Σ⁻¹ J`` over both measurement
+kinds (BF3: the bearing rows of :func:`.fim.bo_jacobian`, signed for cone angles, and the
+frequency rows ``∂(f0 g_b)/∂[x, f0]``); its inverse is the CRLB of all five parameters.
+
+Written here (no maintained library solves it): the frequency rows, their Jacobian and the
+profiled cost are a few lines over the bearings-only solver's parts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import leastsq
+
+from ._kernels import bf_cost_population
+from .bo_tma import _observer_at, _wrap, bearing_model, cone_model, end_side_searches
+from .evolution import evolve
+from .fim import bo_jacobian
+from .result import PolarSearch, TmaSolution, end_value, finish_solution
+
+__all__ = ["doppler_factor", "range_rate_gradient", "solve_bearings_frequency"]
+
+
+def doppler_factor(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
+                   sound_speed: float) -> np.ndarray:
+    """``g_b = 1 − ṙ_b / c`` of eq. (BF1) for the kinematic state ``[x, y, ẋ, ẏ]`` at the
+    window start (m, m/s); ``tau`` (B,) s; ``obs``, ``obs_vel`` (B, 2) m and m/s."""
+    x = np.asarray(state, float)
+    d = x[None, :2] + np.asarray(tau)[:, None] * x[None, 2:4] - obs
+    u = x[None, 2:4] - obs_vel
+    return 1.0 - np.sum(d * u, axis=1) / np.hypot(d[:, 0], d[:, 1]) / sound_speed
+
+
+def range_rate_gradient(state: np.ndarray, tau: np.ndarray, obs: np.ndarray,
+                        obs_vel: np.ndarray) -> np.ndarray:
+    """``∂ṙ_b/∂[x, y, ẋ, ẏ]`` (B, 4): with ``d = p + τ v − o``, ``u = v − v_o``, ``r = |d|``,
+    ``∂ṙ/∂p = u/r − (d·u) d / r³`` and ``∂ṙ/∂v = τ ∂ṙ/∂p + d/r``."""
+    x = np.asarray(state, float)
+    tau = np.asarray(tau, float)
+    d = x[None, :2] + tau[:, None] * x[None, 2:4] - obs
+    u = x[None, 2:4] - obs_vel
+    r = np.hypot(d[:, 0], d[:, 1])[:, None]
+    dp = u / r - np.sum(d * u, axis=1)[:, None] * d / r**3
+    return np.concatenate([dp, tau[:, None] * dp + d / r], axis=1)
+
+
+def _model(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
+           heading: np.ndarray | None, c: float) -> tuple[np.ndarray, np.ndarray]:
+    """Angles (bearings, or cone angles on ``heading``) and frequencies of ``[x, f0]``."""
+    ang = (bearing_model(q[:4], tau, obs) if heading is None
+           else cone_model(q[:4], tau, obs, heading))
+    return ang, q[4] * doppler_factor(q[:4], tau, obs, obs_vel, c)
+
+
+def _jacobian(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
+              heading: np.ndarray | None, c: float) -> np.ndarray:
+    """``∂[angles, frequencies]/∂[x, y, ẋ, ẏ, f0]`` (2B, 5), eq. (BF3)'s rows."""
+    ja = bo_jacobian(q[:4], tau, obs)
+    if heading is not None:
+        ja = np.sign(_wrap(bearing_model(q[:4], tau, obs) - heading))[:, None] * ja
+    jf = np.concatenate([-q[4] / c * range_rate_gradient(q[:4], tau, obs, obs_vel),
+                         doppler_factor(q[:4], tau, obs, obs_vel, c)[:, None]], axis=1)
+    return np.concatenate([np.concatenate([ja, np.zeros((tau.size, 1))], axis=1), jf])
+
+
+def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: np.ndarray,
+                             observer_xy: np.ndarray, observer_vel: np.ndarray,
+                             sigma_rad: float, sigma_hz: float, *,
+                             heading_rad: np.ndarray | None = None,
+                             sound_speed: float = 1500.0, t0: float | None = None,
+                             t1: float | None = None, min_range_m: float = 50.0,
+                             max_range_m: float = 20000.0,
+                             seed: int | np.random.Generator = 0, popsize: int = 20,
+                             maxiter: int = 400) -> TmaSolution:
+    """Maximum-likelihood bearings + frequency TMA (module doc, eqs. (BF1)-(BF3)).
+
+    Parameters
+    ----------
+    times : (B,) array_like
+        s.
+    angle_rad : (B,) array_like
+        Bearings (rad clockwise from north), or cone angles when ``heading_rad`` is given.
+    freq_hz : (B,) array_like
+        Received frequency of the source's tonal (Hz).
+    observer_xy, observer_vel : (B, 2) array_like
+        Array phase-centre positions (m) and velocities (m/s).
+    sigma_rad, sigma_hz : float
+        Angle and frequency standard deviations.
+    heading_rad : (B,) array_like, optional
+        Array headings: the angles are a line array's cone angles, no side chosen (the
+        search runs once per pair of end sides, as :func:`.bo_tma.solve_cone`).
+    sound_speed : float
+        m/s.
+    t0, t1, min_range_m, max_range_m, seed, popsize, maxiter
+        As :func:`.bo_tma.solve_bearings`.
+
+    Returns
+    -------
+    TmaSolution
+        ``method = "bearings_frequency"``; ``state`` is ``[x, y, ẋ, ẏ, f0]`` (m, m/s, Hz) at
+        ``t0`` with the 5 × 5 ``cov`` and ``crlb``; ``side`` as :func:`.bo_tma.solve_cone`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(0.0, 600.0, 10.0)
+    >>> obs = np.stack([np.where(t < 300, 0, 3 * (t - 300)), np.minimum(t, 300) * 3.0], 1)
+    >>> vel = np.stack([np.where(t < 300, 0.0, 3.0), np.where(t < 300, 3.0, 0.0)], 1)
+    >>> truth = np.array([2000.0, 1000.0, 0.0, 3.0, 300.0])
+    >>> from arrayproc.track.batch.bf_tma import doppler_factor
+    >>> from arrayproc.track.batch.bo_tma import bearing_model
+    >>> brg = bearing_model(truth[:4], t, obs)
+    >>> f = truth[4] * doppler_factor(truth[:4], t, obs, vel, 1500.0)
+    >>> sol = solve_bearings_frequency(t, brg, f, obs, vel, 1e-3, 0.01, seed=1)
+    >>> bool(np.allclose(sol.state, truth, rtol=1e-6))
+    True
+    """
+    t = np.asarray(times, float).reshape(-1)
+    ang = np.asarray(angle_rad, float).reshape(-1)
+    f = np.asarray(freq_hz, float).reshape(-1)
+    obs = np.asarray(observer_xy, float).reshape(t.size, 2)
+    ov = np.asarray(observer_vel, float).reshape(t.size, 2)
+    hd = None if heading_rad is None else np.asarray(heading_rad, float).reshape(-1)
+    ok = np.isfinite(ang) & np.isfinite(f)
+    t, ang, f, obs, ov = t[ok], ang[ok], f[ok], obs[ok], ov[ok]
+    hd = None if hd is None else hd[ok]
+    if t.size < 6:
+        raise ValueError(f"bearings + frequency TMA needs at least 6 rows, {t.size} left")
+    t0 = float(t[0] if t0 is None else t0)
+    t1 = float(t[-1] if t1 is None else t1)
+    tau = t - t0
+    o0, o1 = _observer_at(t, obs, t0), _observer_at(t, obs, t1)
+    w = np.concatenate([np.full(t.size, 1.0 / sigma_rad), np.full(t.size, 1.0 / sigma_hz)])
+    c = float(sound_speed)
+
+    def res(q: np.ndarray) -> np.ndarray:
+        a, fm = _model(q, tau, obs, ov, hd, c)
+        ra = ang - a if hd is not None else _wrap(ang - a)
+        return w * np.concatenate([ra, f - fm])
+
+    def jac(q: np.ndarray) -> np.ndarray:
+        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c)
+
+    def pop_cost(p: np.ndarray) -> np.ndarray:
+        return bf_cost_population(p, tau, obs, ov, ang, hd if hd is not None else ang,
+                                  hd is not None, w[:t.size], f, w[t.size:], 1.0 / c)
+
+    if hd is None:
+        (b0, e0), (b1, e1) = end_value(t, ang, t0), end_value(t, ang, t1)
+        searches = {("", ""): PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * e0, 10 * e1),
+                                          min_range_m, max_range_m, t1 - t0, o0, o1)}
+    else:
+        searches = end_side_searches(t, ang, hd, t0, t1, o0, o1, min_range_m, max_range_m)
+    best = None
+    for sides, search in searches.items():
+        de = evolve(lambda q, s=search: pop_cost(s.to_state(q)), search.bounds, seed,
+                    popsize=popsize, maxiter=maxiter, tol=1e-3, mutation=(0.5, 1.0),
+                    recombination=0.9)
+        x = search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
+        g = doppler_factor(x, tau, obs, ov, c)
+        q0 = np.append(x, np.sum(g * f) / np.sum(g * g))            # eq. (BF2)
+        q = leastsq(res, q0, Dfun=jac, xtol=1e-12, ftol=1e-12, gtol=1e-12, maxfev=200)[0]
+        cost = float(np.sum(res(q) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, q, sides)
+    _, q, sides = best
+    wj = jac(q)
+    sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
+                          np.concatenate(_model(q, tau, obs, ov, hd, c)), n_used=t.size)
+    if sides[0]:
+        sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
+    return sol

@@ -1,0 +1,19 @@
+"""Dask clients of one and of two local workers for the evaluation tests."""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def clients():
+    pytest.importorskip("distributed")
+    from arrayproc.app.batch import start_client
+    out = {}
+    for n in (1, 2):
+        out[n] = start_client(workers=n, threads=1)
+        out[n][0].wait_for_workers(n)
+    yield {n: c for n, (c, _) in out.items()}
+    for c, cluster in out.values():
+        c.close()
+        cluster.close()
