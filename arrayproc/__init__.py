@@ -62,7 +62,7 @@ __all__ = ["__version__", *_API, *_MODULES]
 
 def _version() -> str:
     # Looked up on first use: importlib.metadata costs about a third of the start-up of
-    # `arrayproc info` (issue 12, start-up).
+    # `arrayproc info` (docs/performance/startup.md).
     from importlib.metadata import PackageNotFoundError, version
     try:
         return version("arrayproc")

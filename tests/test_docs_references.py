@@ -31,6 +31,8 @@ from pathlib import Path
 
 import pytest
 
+from arrayproc.config import read_toml
+
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "arrayproc"
 TOP = ("arrayproc", "scripts", "tests", "docs")
@@ -134,6 +136,8 @@ def resolve_short(token: str) -> bool | None:
     shorts = short_names()
     for i in range(len(parts) - 1, 0, -1):
         key = ".".join(parts[:i])
+        if key in toml_tables():  # a key of a configuration table (``tracker.level``)
+            return None
         if key in shorts:
             if _resolve_in(shorts[key], parts[i:]):
                 return True
@@ -141,6 +145,27 @@ def resolve_short(token: str) -> bool | None:
                 return None
             return False
     return None
+
+
+@functools.cache
+def toml_tables() -> frozenset[str]:
+    """Names of the tables in the shipped TOML files (``stage``, ``beams``, ``tracker``): a
+    ``table.key`` token is a configuration key, not a module attribute."""
+    names: set[str] = set()
+
+    def walk(d: dict) -> None:
+        for k, v in d.items():
+            if isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+                names.add(k)
+                for x in v:
+                    walk(x)
+            elif isinstance(v, dict):
+                names.add(k)
+                walk(v)
+
+    for f in sorted((PKG / "data").rglob("*.toml")):
+        walk(read_toml(f, "shipped TOML")[0])
+    return frozenset(names)
 
 
 @functools.cache
@@ -332,7 +357,7 @@ def test_checker_accepts_what_exists():
             "[t](architecture/tracking.md), arrayproc/track/models/, "
             "`arrayproc.dsp.fft.BufferedPlan`, "
             "`arrayproc.io.recording.Recording.read`, `schema.groups_of_kind`, `np.matmul`, "
-            "`out/rec.h5`, ``io.BytesIO``")
+            "`out/rec.h5`, ``io.BytesIO``, `tracker.level`, ``stage.beam_axis``")
     assert stale_paths(text, base) == []
     assert stale_names(text) == []
     assert stale_roles(":mod:`atomic`, :meth:`flush` and :func:`open_h5`",

@@ -517,7 +517,7 @@ def tma(products: str, config: str, output: str, progress: bool = False) -> None
 # -- export -----------------------------------------------------------------------------------
 def export(files: Sequence[str], to: str, output: str,
            origin: tuple[float, float] = (0.0, 0.0)) -> int:
-    """Write products or tracks files in an exchange format (issue 19).
+    """Write products or tracks files in an exchange format (Raven selection tables, Debrief REP).
 
     Parameters
     ----------

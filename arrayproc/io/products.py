@@ -1,4 +1,4 @@
-"""Products files (DESIGN section 4): groups of columns appended as blocks come.
+"""Products files (docs/formats.md): groups of columns appended as blocks come.
 
 Each group is named after the producing stage and carries attrs ``kind`` and ``stage``. Column
 datasets are resizable along their first axis, chunked and compressed; static datasets (axes

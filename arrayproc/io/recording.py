@@ -1,4 +1,4 @@
-"""Recording files (DESIGN section 3): a streaming reader into blocks and a streaming writer.
+"""Recording files (docs/formats.md): a streaming reader into blocks and a streaming writer.
 
 The reader pulls ``/time_data`` by HDF5 hyperslabs of a fixed size (a few MB), so memory is
 bounded by the slab and block sizes, never by the file length. Files in acoular's layout (only
@@ -130,7 +130,7 @@ def read_numeric(f: h5py.File, p: Path, name: str, required: bool = False) -> np
 
 @dataclass(frozen=True)
 class Replica:
-    """A transmitted waveform from ``/active/waveforms/<name>`` (DESIGN section 4).
+    """A transmitted waveform from ``/active/waveforms/<name>`` (docs/formats.md).
 
     ``samples`` float64 at ``fs`` (the recording's rate), sample 0 at the transmission start;
     ``kind`` (bpsk, hfm, cw, lfm or other), ``fc`` centre frequency (Hz), ``bandwidth`` (Hz),
@@ -358,7 +358,7 @@ class Recording:
         return walk(g, name)
 
     def active(self) -> ActivePings | None:
-        """The ``/active`` ping schedule and replicas (DESIGN section 4), or None without it.
+        """The ``/active`` ping schedule and replicas (docs/formats.md), or None without it.
 
         ``/active/pings/waveform`` may index the sorted waveform names or hold the names.
         """
@@ -555,7 +555,7 @@ class RecordingWriter(AtomicH5Writer):
     def set_active(self, time: np.ndarray, waveform: np.ndarray,
                    waveforms: dict[str, tuple[np.ndarray, dict[str, Any]]],
                    projector: np.ndarray) -> None:
-        """Write ``/active`` (DESIGN section 4): ping times (s), each ping's index into the
+        """Write ``/active`` (docs/formats.md): ping times (s), each ping's index into the
         sorted waveform names, the replicas ``{name: (samples at fs, attrs)}`` with attrs
         ``kind``, ``fc``, ``bandwidth``, ``duration`` (and ``bits``), the projector (m)."""
         g = self._f.require_group("active")

@@ -400,7 +400,7 @@ class CBF(Stage):
 
     def _back(self, part: int, chunks: Iterator[int], ops: tuple, y: np.ndarray) -> None:
         """Chunks of bins taken from ``chunks`` (first bin of each), for every snapshot: the
-        corner turn of the chunk into per-bin operands in cache (:func:`gather_bins`), one
+        corner turn of the chunk into per-bin operands in cache (``_kernels.gather_bins``), one
         real GEMM per bin and the unpack of its results into the beams (worker ``part``)."""
         w = self._results(part, y.shape[0], ops[0].shape[3])
         chunk, nf = w[0].shape[0], y.shape[1]
