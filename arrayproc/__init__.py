@@ -16,7 +16,7 @@ filter (``EKF``, ``UKF``, ``RPF``, ... and ``make_filter``), every batch TMA met
 (``read_products`` -> ``ProductsFile`` with ``.groups(kind)``), the plots (``plot_file`` and
 the ``draw_*`` functions that draw on a matplotlib ``Axes``) and the simulator
 (``simulate_file``) are reachable the same way; the full list is ``arrayproc.__all__``. Each
-name is defined once: ``arrayproc.X`` is the object of the module listed in ``_API``.
+name is defined once: each ``arrayproc`` attribute is the object of the module listed in ``_API``.
 """
 
 from __future__ import annotations
@@ -122,7 +122,7 @@ __all__ = ["__version__", *_API, *_MODULES]
 
 def _version() -> str:
     # Looked up on first use: importlib.metadata costs about a third of the start-up of
-    # `arrayproc info` (issue 12, start-up).
+    # `arrayproc info` (docs/performance/startup.md).
     from importlib.metadata import PackageNotFoundError, version
     try:
         return version("arrayproc")

@@ -45,7 +45,7 @@ def load_base(rev: str, root: Path, tmp: Path):
 
 def base_source(base_cbf):
     """The same blocks as :func:`bench_cbf.source` in the base package's own block type: a
-    revision from before the typed domains (DESIGN 2nd ed.) takes a tuple domain and a dict of
+    revision from before the typed domains takes a tuple domain and a dict of
     metadata. The repacking costs a few microseconds per 8192-sample block."""
     mod = sys.modules[base_cbf.__name__.rsplit(".", 2)[0]]
     try:

@@ -44,7 +44,7 @@ from arrayproc.dsp.windows import time_taper
 from arrayproc.io.geometry import line_array
 from arrayproc.stages.beamform.mvdr import MVDR
 
-# the CBF benchmark's configuration (issue 4): same data, same beams
+# the CBF benchmark's configuration (scripts/bench_cbf.py): same data, same beams
 FS, N_CH, NFFT, HOP = bench_cbf.FS, bench_cbf.N_CH, bench_cbf.NFFT, bench_cbf.HOP
 BAND, BEAMS, C = bench_cbf.BAND, bench_cbf.BEAMS, bench_cbf.C
 LOADING = 0.01

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark of ``arrayproc batch`` on dask.distributed (issue 18; docs/performance/batch.md).
+"""Benchmark of ``arrayproc batch`` on dask.distributed (docs/performance/batch.md).
 
     .venv/bin/python scripts/bench_batch.py [--dir DIR] [--seconds 60] [--channels 64]
         [--recordings 4] [--chain towed_passive] [--repeats 2] [--mc-runs 500] [--no-mc]

@@ -1,6 +1,6 @@
-"""Benchmark of the ``cbf`` stage (issue 4) against a plain per-snapshot numpy CBF.
+"""Benchmark of the ``cbf`` stage against a plain per-snapshot numpy CBF.
 
-Configuration (issue 4): 64 channels, 5120 Hz, nfft 2048, hop 1024, 181 cone-angle beams
+Configuration: 64 channels, 5120 Hz, nfft 2048, hop 1024, 181 cone-angle beams
 0..180°, band 100-2000 Hz (761 bins), Hann window, float32 data. The stage is fed 8192-sample
 time blocks of white noise from a generator (no disk I/O), exactly as the chain reader would.
 

@@ -1,4 +1,4 @@
-"""Benchmark of the simulator (issue 3): 64 channels at 5120 Hz, two moving sources with three
+"""Benchmark of the simulator: 64 channels at 5120 Hz, two moving sources with three
 tonals and a broadband band each, ambient noise, moving ownship.
 
 Prints the real-time factor (simulated seconds per wall-clock second) of the full simulator

@@ -1,4 +1,4 @@
-"""Benchmark: per-snapshot delays of 64 channels (issue 14).
+"""Benchmark: per-snapshot delays of 64 channels (docs/performance/delays.md).
 
 64 hydrophones 0.36 m apart (the thesis's towed array, app. C) sampled at 5120 Hz, 1 s snapshots
 with 50 % overlap, band 100-2000 Hz, every channel against channel 0 with the lag limited to the

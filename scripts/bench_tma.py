@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark: batch TMA, numba against plain numpy/scipy, in one process (issue 15).
+"""Benchmark: batch TMA, numba against plain numpy/scipy, in one process.
 
 1. One TD-TMA solution, 128 hydrophones × 100 snapshots (thesis eqs. (3.51)-(3.52)):
    :func:`arrayproc.track.batch.td_tma.solve_delays` — differential evolution

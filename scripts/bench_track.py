@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Throughput of our UKF against filterpy's UKF on the L-R paper's Case I (issue 6).
+"""Throughput of our UKF against filterpy's UKF on the L-R paper's Case I.
 
 Both run the same scenario (31 bearings, known side) back to back in this process: ours as
 the numba Monte Carlo kernel (runs in parallel on the available cores), filterpy's as its

@@ -1,4 +1,4 @@
-"""Readings of the L-R paper's section V tested against table I (issue 6), known side only.
+"""Readings of the L-R paper's section V tested against table I, known side only.
 
 Each *reading* changes one or two settings the paper leaves open or could be read otherwise
 (the filters' process-noise intensity and its units, the bearing noise of data and filter,

@@ -6,7 +6,7 @@ Scenario of fig. 3.18 (:mod:`arrayproc.track.batch.scenarios`): source initial p
 bearing precision σ_θ = 0.0306° the thesis takes from appendix C.1. Each run draws new
 Gaussian errors and solves both estimators (differential evolution + least-squares polish);
 the position-error standard deviation is compared with the CRLB (thesis eq. (3.53)).
-Targets (issue 15): TD-TMA within 15 % of its CRLB, BO-TMA within 30 %.
+Targets: TD-TMA within 15 % of its CRLB, BO-TMA within 30 %.
 
 Usage:
   python scripts/reproduce_batch_tma.py --runs N [--seed 1] [--json OUT] [--plot DIR]

@@ -1,4 +1,4 @@
-"""Reproduce the thesis's time-delay figures and the localisation checks of issue 14.
+"""Reproduce the thesis's time-delay figures and the TDOA localisation checks.
 
 * fig. 3.15: Monte Carlo standard deviation of the cross-correlation delay (eqs. (3.26),
   (3.27) with FFT interpolation) for white signals of bandwidth W = 10, 100, 1000 Hz, fs 5120 Hz,

@@ -1,4 +1,4 @@
-"""Issue 19 on the active scenario: the multi-target tracker (``measurements = "contacts"``)
+"""The active scenario: the multi-target tracker (``measurements = "contacts"``)
 on the contacts of the active chain, scored against the simulator's /truth.
 
 Runs (each step skipped with ``--reuse`` when its output exists)::

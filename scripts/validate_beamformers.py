@@ -1,5 +1,5 @@
 """Adaptive, subspace and port/starboard beamformers against closed forms: the numbers of
-docs/validation/beamformers.md.
+docs/results/validate_beamformers.json.
 
 Parts (``--parts``, comma separated; all by default):
 

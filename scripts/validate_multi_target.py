@@ -1,4 +1,4 @@
-"""Closing numbers of the multi-target tracker (issue 19) for tracks files of simulated
+"""Closing numbers of the multi-target tracker for tracks files of simulated
 scenarios: per source the share of its detected scans held by its principal confirmed track,
 breaks, final position error; false confirmed tracks; GOSPA (c = 1000 m, p = 2, α = 2) and
 OSPA over time (:func:`arrayproc.evaluate.metrics.evaluate_tracks_file`).

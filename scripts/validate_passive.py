@@ -1,4 +1,4 @@
-"""Passive chain (issue 4) against the thesis closed forms: the numbers of docs/validation.md.
+"""Passive chain against the thesis closed forms: the numbers of docs/validation.md.
 
 Measures, with the same set-ups as the tests (the functions of
 :mod:`arrayproc.evaluate.scenarios.thesis_passive`):

@@ -1,4 +1,4 @@
-"""Validation of the recursive TDOA tracker (issue 19; thesis 3.2.2.2, eqs. 3.37-3.40) against
+"""Validation of the recursive TDOA tracker (thesis 3.2.2.2, eqs. 3.37-3.40) against
 the batch TD-TMA (thesis 3.3.2, eqs. 3.48-3.52) on the same delays.
 
 The thesis's case: a 20 m towed array (``tests/track/data/tdoa_20m_scenario.toml``: 21

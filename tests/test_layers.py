@@ -1,4 +1,4 @@
-"""The package's import structure (DESIGN section 2): the layer contract of pyproject.toml
+"""The package's import structure (docs/architecture.md): the layer contract of pyproject.toml
 (import-linter) and no import cycle between modules, lazy imports inside functions included."""
 
 from __future__ import annotations

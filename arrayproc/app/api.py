@@ -47,6 +47,33 @@ def run_chain(recording: Any, spec: _chain.ChainSpec, products: Any = None,
     -------
     int
         Number of time blocks read.
+
+    Examples
+    --------
+    Band power of a 100 Hz tone on four hydrophones, one products row per 1000-sample block:
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> import arrayproc as ap
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> rec_path, out_path = (os.path.join(tmp.name, n) for n in ("rec.h5", "products.h5"))
+    >>> positions = np.zeros((4, 3)); positions[:, 0] = -0.75 * np.arange(4)
+    >>> tone = np.sin(2 * np.pi * 100.0 * np.arange(4000) / 1000.0)
+    >>> with ap.RecordingWriter(rec_path, 1000.0, 4, positions=positions) as w:
+    ...     w.append(np.repeat(tone[:, None], 4, axis=1).astype(np.float32))
+    >>> chain = ap.build_chain('''
+    ... [input]
+    ... block = 1000
+    ... [[stage]]
+    ... type = "power"
+    ... band = [50.0, 200.0]
+    ... ''')
+    >>> with ap.Recording(rec_path) as rec, ap.ProductsWriter(out_path) as products:
+    ...     ap.run_chain(rec, chain, products)
+    4
+    >>> ap.read_products(out_path)["power"]["time"]
+    array([0.5, 1.5, 2.5, 3.5])
+    >>> tmp.cleanup()
     """
     if callable(progress):
         return _chain.run_chain(recording, spec, products, t_start, t_stop, progress, log)

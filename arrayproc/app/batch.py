@@ -1,5 +1,5 @@
 """``arrayproc batch``: a chain over many recordings, or over segments of one long recording, as
-tasks on ``dask.distributed`` (DESIGN section 7; docs/scale-out.md).
+tasks on ``dask.distributed`` (docs/scale-out.md).
 
     arrayproc batch INPUTS... -c CHAIN.toml -o OUTDIR [--workers N | --scheduler ADDRESS]
                     [--segment-s S] [--resume]

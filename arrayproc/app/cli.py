@@ -1,4 +1,4 @@
-"""The ``arrayproc`` command line (DESIGN section 6): the parser, and errors as one line.
+"""The ``arrayproc`` command line: the parser, and errors as one line.
 
 The commands themselves are library functions (:mod:`arrayproc.app.commands`); this module
 only builds the parser from the command modules listed in :data:`COMMAND_MODULES` (each has

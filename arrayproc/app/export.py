@@ -12,7 +12,7 @@ from arrayproc.io.atomic import check_output
 
 def export(files: Sequence[str], to: str, output: str,
            origin: tuple[float, float] = (0.0, 0.0)) -> int:
-    """Write products or tracks files in an exchange format (issue 19).
+    """Write products or tracks files in an exchange format (Raven selection tables, Debrief REP).
 
     Parameters
     ----------

@@ -5,7 +5,7 @@ The estimate counts the arrays that dominate a run (bytes, complex64 / float32 a
 use them), per stage:
 
 * the reader: the HDF5 slab (at most 8 MiB) and three copies of a ``block`` × C block;
-* a stage with beams (B beams, from ``beams.count`` or the bearing × elevation lists): the
+* a stage with beams (B beams, from ``beams = {count}`` or the bearing × elevation lists): the
   steering matrix B·F·C, the beam spectra B·F per snapshot kept for ``max(batch, snapshots)``
   snapshots, and the element spectra F·C per snapshot of a batch, F being the DFT bins in the
   stage's band (all ``nfft/2 + 1`` without one);

@@ -21,7 +21,7 @@ A chain file looks like::
 
 Each stage reads the stage before it unless it names an ``input``. The reader feeds
 non-overlapping time blocks of ``block`` samples; stages that need overlapping frames
-(FFT-based ones) frame the stream themselves with :class:`FrameBuffer`, so block boundaries
+(FFT-based ones) frame the stream themselves with ``dsp.framing.FrameBuffer``, so block boundaries
 never show in the results.
 
 Segments: :func:`run_chain` accepts ``t_start``/``t_stop``; it reads from a warm-up margin

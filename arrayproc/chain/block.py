@@ -14,7 +14,7 @@ from arrayproc.geo.pose import Pose
 
 @dataclass(frozen=True)
 class Block:
-    """One snapshot of data with its context (DESIGN section 1).
+    """One snapshot of data with its context (docs/architecture.md, Blocks and domains).
 
     Attributes
     ----------

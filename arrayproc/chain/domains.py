@@ -1,4 +1,4 @@
-"""Block domains, declared in one place (DESIGN section 1), with typed metadata per domain.
+"""Block domains, declared in one place (docs/architecture.md), with typed metadata per domain.
 
 A block's ``domain`` names the axes of its ``data`` and the class of its ``meta``. Stages
 declare which domains they accept and which they produce; :func:`arrayproc.chain.build_chain`

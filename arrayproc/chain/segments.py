@@ -2,7 +2,7 @@
 independent segments concatenate into the result of one long run, the plan that cuts a
 recording into such segments, and the merge of the segments' products files into one.
 
-DESIGN section 7. A segment ``[t_start, t_stop)`` is run by :func:`arrayproc.chain.run_chain`
+docs/scale-out.md. A segment ``[t_start, t_stop)`` is run by :func:`arrayproc.chain.run_chain`
 from ``t_start − margin`` to ``t_stop + margin`` and its products writer keeps the rows whose
 ``time`` falls in the segment, so the segments' rows partition the single run's rows.
 

@@ -10,7 +10,7 @@ as ``y(u) = Σ_j s[m + j] · h(μ − j)``, ``m = floor(u)``, ``μ = u − m``,
 quantised to 1/(2M) sample, 12 ns at the simulator's 10240 Hz source rate), so a read costs
 ``2K`` multiply-adds with no transcendental function.
 
-Accuracy (measured by ``tests/test_fracdelay.py`` against the analytic sinusoid): with the
+Accuracy (measured by ``tests/dsp/test_fracdelay.py`` against the analytic sinusoid): with the
 default ``K = 6``, ``β = 8``, ``M = 4096`` and a signal band-limited to 0.225·fs_src (the
 simulator's sources are generated at twice the output rate and band-limited to 0.45 of the
 output rate), the peak error of a unit sinusoid is about −71 dB at any fractional delay

@@ -1,5 +1,5 @@
 """Monte Carlo runs spread over a Dask client, with results that do not depend on the number
-of workers (DESIGN section 7; docs/scale-out.md).
+of workers (docs/scale-out.md).
 
 The runs are cut into chunks of a fixed size (``chunk``), chunk i drawing its noise from
 ``numpy.random.SeedSequence(seed).spawn(n_chunks)[i]``; the chunking and the seeds depend only

@@ -1,6 +1,6 @@
 """Angle arithmetic: the one home of every angle wrap in arrayproc.
 
-Conventions (DESIGN section 4): a *true bearing* or course is clockwise from north,
+Conventions (docs/architecture.md): a *true bearing* or course is clockwise from north,
 ``atan2(dx, dy)`` with x east and y north; degrees at public interfaces, radians inside.
 ``wrap_pi_scalar`` is the scalar form for numba kernels: a kernel module compiles it with
 ``numba.njit(wrap_pi_scalar)`` so that compiled and numpy code wrap with the same arithmetic,

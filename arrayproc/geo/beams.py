@@ -1,6 +1,6 @@
 """Beam fans: the ``beams`` table of a chain stage (cone angles of a line array, or bearings and
 elevations for a volumetric array) turned into beam axes and body-frame unit directions
-(DESIGN section 3: body x forward, y starboard, z down; cone 0 deg forward end-fire)."""
+(docs/architecture.md: body x forward, y starboard, z down; cone 0 deg forward end-fire)."""
 
 from __future__ import annotations
 

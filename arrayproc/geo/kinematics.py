@@ -1,6 +1,6 @@
 """Plane kinematics shared by the simulator and the trackers.
 
-Conventions (DESIGN section 2): world frame x = east, y = north (m); a *true bearing* or a
+Conventions (docs/architecture.md): world frame x = east, y = north (m); a *true bearing* or a
 *course* is the angle clockwise from north, ``atan2(dx, dy)``. Angles are degrees at every
 public interface and radians inside.
 

@@ -9,7 +9,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Nav:
-    """Array reference-point track (DESIGN section 3, ``/nav``).
+    """Array reference-point track (``/nav``, docs/formats.md).
 
     ``time`` (n,) s strictly increasing; ``position`` (n, 2) m (x east, y north); ``heading``
     (n,) deg true; ``depth`` (n,) m or None.

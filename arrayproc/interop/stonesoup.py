@@ -5,7 +5,7 @@
   pose, ``bearings`` with ``Cartesian2DToBearing`` (both members of a line array's
   port/starboard pair as detections), ``positions`` with a linear position model.
 - :func:`tracks_to_rows` / :func:`write_tracks` — Stone Soup tracks back to our ``tracks``
-  kind (DESIGN section 5).
+  kind (docs/formats.md).
 - :func:`gnn_tracker` — the GNN tracker assembled from Stone Soup components equivalent to
   :func:`arrayproc.track.multi.contacts_manager` (CV model, EKF, Mahalanobis gate, 2-D
   assignment, multi-measurement initiation, deletion after missed updates); the reference of

@@ -1,6 +1,6 @@
 """Array geometry: element positions in the body frame and their pose in the world frame.
 
-Body frame (DESIGN section 2): x forward along the array heading, y starboard, z down, origin at
+Body frame (docs/architecture.md): x forward along the array heading, y starboard, z down, origin at
 the array reference point. World frame: x east, y north, z down.
 """
 

@@ -1,4 +1,4 @@
-"""Products files (DESIGN section 4): groups of columns appended as blocks come.
+"""Products files (docs/formats.md): groups of columns appended as blocks come.
 
 Each group is named after the producing stage and carries attrs ``kind`` and ``stage``. Column
 datasets are resizable along their first axis, chunked and compressed; static datasets (axes
@@ -301,6 +301,23 @@ def read_products(path: str | os.PathLike) -> ProductsFile:
     ------
     FormatError
         Not a products file, or a group lacks a required column of its kind.
+
+    Examples
+    --------
+    A group written by hand (a stage does the same through its ``products(kind)`` writer):
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from arrayproc import ProductsWriter, read_products
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(tmp.name, "products.h5")
+    >>> with ProductsWriter(path) as out:
+    ...     out.group("power", "power", "power").append(
+    ...         time=np.array([0.5, 1.5]), power_db=np.array([[60.0, 61.0], [62.0, 63.0]]))
+    >>> groups = read_products(path)
+    >>> groups["power"]["kind"], groups["power"]["power_db"].shape
+    ('power', (2, 2))
+    >>> tmp.cleanup()
     """
     with open_h5(path, "products file") as f:
         fmt = f.attrs.get("format", "")

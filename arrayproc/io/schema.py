@@ -1,4 +1,4 @@
-"""Every product kind and its columns, in one place (DESIGN section 5).
+"""Every product kind and its columns, in one place (docs/formats.md lists them).
 
 A products group has an attribute ``kind``; its *columns* are datasets with one row per
 snapshot, event, contact, track point or solution, appended as blocks come; its *axes* are

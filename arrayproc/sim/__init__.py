@@ -1,4 +1,4 @@
-"""Scenario (TOML) → simulated hydrophone recording with ground truth (issue 3).
+"""Scenario (TOML) → simulated hydrophone recording with ground truth.
 
 Entry point: :func:`arrayproc.sim.run.simulate_file` (``arrayproc simulate``).
 """

@@ -248,8 +248,8 @@ class ActiveSim:
         return first, last
 
     def truth(self) -> dict:
-        """``/truth/pings`` (time, waveform name, source level) and ``/truth/echoes`` (DESIGN
-        section 3) plus scatterer data; attrs: the first scheduled waveform's parameters (the
+        """``/truth/pings`` (time, waveform name, source level) and ``/truth/echoes``
+        (docs/formats.md) plus scatterer data; attrs: the first scheduled waveform's parameters (the
         only one's in the single-waveform form), the schedule and the projector offset."""
         w = self.windows
         wf = self.spec.waveform
@@ -280,7 +280,7 @@ class ActiveSim:
 
     def recording_active(self) -> tuple:
         """Arguments of :meth:`arrayproc.io.recording.RecordingWriter.set_active`: the ping
-        schedule and every replica as a real sonar recording carries them (DESIGN section 4),
+        schedule and every replica as a real sonar recording carries them (docs/formats.md),
         each replica sampled at the recording's rate (unit peak, the transmitted taper) and
         stored under its scenario name; each ping's index into the sorted names."""
         reps = {}

@@ -93,6 +93,16 @@ def load_chain(path: str) -> ChainSpec:
     Returns
     -------
     ChainSpec
+
+    Examples
+    --------
+    The shipped towed-array chain (``arrayproc data-dir`` prints the folder):
+
+    >>> from arrayproc import load_chain
+    >>> from arrayproc.data import data_path
+    >>> chain = load_chain(str(data_path("chains/towed_passive.toml")))
+    >>> chain.names()
+    ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings']
     """
     from arrayproc.config import read_toml
     cfg, text = read_toml(path, "chain")

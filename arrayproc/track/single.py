@@ -1,8 +1,8 @@
 """``arrayproc track``: run a bearings tracker on a products file and write a tracks file.
 
-Reads the ``bearings`` rows of a products file (DESIGN section 4) and the array's navigation
-from the recording named by the products file's root attribute ``source`` (DESIGN section 3,
-``/nav``), runs the filter chosen in the tracker TOML — with left-right resolution (L-R paper
+Reads the ``bearings`` rows of a products file (docs/formats.md) and the array's navigation
+from the recording named by the products file's root attribute ``source``
+(``/nav``), runs the filter chosen in the tracker TOML — with left-right resolution (L-R paper
 eqs. (9)-(13)) when the bearings come from a line array — and writes a ``tracks`` group
 (``time``, ``track_id``, ``x``, ``y``, ``vx``, ``vy``, ``cov`` (n, 4, 4), plus the ownship
 ``own_x``, ``own_y`` used for plotting).
@@ -210,7 +210,7 @@ def _read_bearings(prod: dict, name: str | None, products_path: str,
 
 def _read_nav(path: str) -> Nav:
     """The navigation of a recording (:attr:`arrayproc.io.recording.Recording.nav`; a static
-    array at the origin heading north when /nav is absent, DESIGN section 3)."""
+    array at the origin heading north when /nav is absent)."""
     from arrayproc.io.recording import Recording
 
     if not os.path.exists(path):
@@ -278,7 +278,7 @@ def build_components(cfg: dict[str, Any], levels: bool = False
     Parameters
     ----------
     cfg : dict
-        A :func:`load_tracker_config` result.
+        A :func:`~arrayproc.track.runner.load_tracker_config` result.
     levels : bool
         Use the level + bearing model (SPL paper eqs. (31)-(33)) instead of bearings only.
 
@@ -320,7 +320,7 @@ def track_bearings(times: np.ndarray, zs_rad: np.ndarray, own: np.ndarray,
     own : (K, 4) ndarray
         Observer states (m, m/s).
     cfg : dict
-        Tracker configuration (:func:`load_tracker_config`).
+        Tracker configuration (:func:`~arrayproc.track.runner.load_tracker_config`).
     levels_db : (K,) ndarray, optional
         Received levels (dB re 1 µPa): the level + bearing model is used (rows with a
         non-finite level update on the bearing alone).

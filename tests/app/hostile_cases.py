@@ -1,4 +1,4 @@
-"""The hostile-input table of issue 13: each case builds its bad input in a work directory and
+"""The hostile-input table: each case builds its bad input in a work directory and
 returns the ``arrayproc`` arguments that must fail cleanly (exit 2, one ``arrayproc: error:``
 line naming the problem, no traceback, nothing new left, every input byte-identical).
 

@@ -1,4 +1,4 @@
-"""``arrayproc batch`` on a 2-worker LocalCluster (issue 18): products equal to ``arrayproc
+"""``arrayproc batch`` on a 2-worker LocalCluster: products equal to ``arrayproc
 process`` bit for bit, segments merged into the single run, a worker killed mid-task, resume,
 and a corrupt input failing alone."""
 

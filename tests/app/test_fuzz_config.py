@@ -1,4 +1,4 @@
-"""Issue 13: hypothesis fuzzing of the configuration validators (chains, scenarios, trackers)
+"""Hypothesis fuzzing of the configuration validators (chains, scenarios, trackers)
 and of recording attributes: whatever the document, only the project's own errors
 (:class:`~arrayproc.errors.ArrayprocError`) escape.
 

@@ -1,4 +1,4 @@
-"""Issue 13: every way into arrayproc, driven through the real command line (``main``).
+"""Every way into arrayproc, driven through the real command line (``main``).
 
 Each case of :mod:`tests.app.hostile_cases` must give exit status 2, exactly one stderr line
 ``arrayproc: error: …`` containing the case's key text, no traceback, no new file (no output,

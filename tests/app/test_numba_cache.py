@@ -1,4 +1,4 @@
-"""Issue 13: with numba's cache directories unwritable (package installed by root, run by a user
+"""With numba's cache directories unwritable (package installed by root, run by a user
 whose HOME is read-only) commands fall back to a private cache directory with one warning."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 13, what must keep working or warn: warnings as one line, plots in the format the
+"""What must keep working or warn: warnings as one line, plots in the format the
 extension names, ``info`` on any file (acoular layout without geometry, 8,000 channels), writers
 that never leak a temporary file, a swallowed interrupt that still stops the writers, truncated
 WAV files imported with a warning, and the chain memory estimate."""
@@ -74,7 +74,7 @@ def test_info_describes_acoular_layout_without_geometry(tmp_path, capsys):
 
 
 def test_info_on_8000_channels_is_cheap(tmp_path):
-    """Peak memory of `info` on a small file with 8,000 channels (3.5 GB before issue 13)."""
+    """Peak memory of `info` on a small file with 8,000 channels (it took 3.5 GB once)."""
     p = tmp_path / "wide.h5"
     pos = np.zeros((8000, 3))
     pos[:, 0] = np.arange(8000) * 0.1

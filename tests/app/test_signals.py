@@ -1,4 +1,4 @@
-"""Issue 13, signals: SIGINT, SIGTERM and SIGHUP sent at random times to ``process`` and
+"""Signals: SIGINT, SIGTERM and SIGHUP sent at random times to ``process`` and
 ``simulate`` stop the run with status 128 + signal, one ``arrayproc: error:`` line, no
 traceback, no output and no ``.part`` file, and a pre-existing output untouched.
 

@@ -1,4 +1,4 @@
-"""Issue 12/13 start-up: ``arrayproc --version`` and ``info`` import no heavy module (scipy,
+"""Start-up: ``arrayproc --version`` and ``info`` import no heavy module (scipy,
 numba, matplotlib, dask, the stage registry); the time itself is measured outside the tests
 (docs/performance/startup.md)."""
 
@@ -45,7 +45,7 @@ def test_info_imports_nothing_heavy(tmp_path, rng):
     assert _heavy_modules("info", str(rec)) == []
 
 
-# Issue 23: `process` with the shipped towed-array chain (dft_filter, CBF, integrate, BTR,
+# `process` with the shipped towed-array chain (dft_filter, CBF, integrate, BTR,
 # LOFAR, bearings) runs without importing these: windows and tapers are closed forms (or
 # numpy's Kaiser), pyfftw (which imports dask.array) and scipy.fft load only when a path uses
 # them. scipy.linalg is not listed: numba imports it on its first compile or cache load.

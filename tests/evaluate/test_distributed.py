@@ -1,4 +1,4 @@
-"""Monte Carlo on Dask (issue 18): the batch-TMA reproduction (thesis fig. 3.19) spread over 1
+"""Monte Carlo on Dask: the batch-TMA reproduction (thesis fig. 3.19) spread over 1
 and over 2 workers gives the same numbers, bit for bit."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Several waveforms and a ping schedule in the scenario's [active] section: parsing, the
-replicas and schedule written to /active (DESIGN section 4) and /truth, and the rendered
+replicas and schedule written to /active (docs/formats.md) and /truth, and the rendered
 pulses following the schedule (each ping its own waveform and source level)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Simulator physics against closed forms: phases, Doppler, levels, delays (issue 3).
+"""Simulator physics against closed forms: phases, Doppler, levels, delays.
 
 Each test prints its measured error (run with ``-s`` to see the numbers quoted in
 docs/validation.md).

@@ -1,4 +1,4 @@
-"""arrayproc track: products bearings + recording nav → tracks group (issue 6)."""
+"""arrayproc track: products bearings + recording nav → tracks group."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Import structure of the tracking parts (state, models, filters, L-R, initialisation, runner):
 no cycle between them (lazy imports included) and no import of stages, sim, plots or app from
-any track module (DESIGN section 2). The whole package's cycles are tests/test_layers.py's."""
+any track module (docs/architecture.md). The whole package's cycles are tests/test_layers.py's."""
 
 from __future__ import annotations
 

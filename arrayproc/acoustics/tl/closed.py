@@ -8,7 +8,8 @@ a transition range followed by cylindrical spreading, each optionally with volum
 
 (Urick 1983, ch. 5; r in m, α in dB/m.) Ranges below 1 m are clamped to 1 m (TL = 0 there).
 The absorption coefficient ``thorp_db_per_km`` is Thorp's formula (Urick 1983 eq. 5.3).
-The depth arguments exist so that these forms share the :class:`TLModel` signature.
+The depth arguments exist so that these forms share the signature of
+:class:`~arrayproc.acoustics.tl.table.TLTable` (range, source depth, receiver depth).
 """
 
 from __future__ import annotations

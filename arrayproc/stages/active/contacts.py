@@ -15,7 +15,7 @@ along the array axis, p is the projector's position at transmission in the body 
 reception, p - (U tau, 0, 0) (80 m at 20 km and 3 m/s: forty range cells of the thesis's
 BPSK).
 
-Absolute Doppler, thesis eq. (4.9). Range rates here are positive *opening* (DESIGN section 3).
+Absolute Doppler, thesis eq. (4.9). Range rates here are positive *opening* (docs/architecture.md).
 A still scatterer seen by a platform moving at U along the array axis closes at U cos(cone)
 (two-way mean of the projector's and the array's legs, both towed at U), so its measured range
 rate is -U cos(cone), and

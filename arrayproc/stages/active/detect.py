@@ -1,5 +1,5 @@
 """``cfar``: CFAR detection on the matched-filter bank's output, clustering into contacts, and
-the ``contacts`` product (DESIGN section 5) with absolute Doppler (thesis eq. (4.9)).
+the ``contacts`` product (docs/formats.md) with absolute Doppler (thesis eq. (4.9)).
 
 Per beam of each ``matched_filter`` block the square-law plane (range-rate channels x lags) goes
 through the CFAR of :mod:`arrayproc.stages.active.cfar` (CA, GO, SO or OS; 1-D along range when

@@ -23,7 +23,7 @@ replica spectra evaluated at that FFT's bins. Doppler-insensitive pings yield no
 mode (their contacts come from the source stage). ``cells`` counts the cells computed.
 
 Optional ``range_doppler = {pings = [...], cones = [...], range_m = [lo, hi]}`` writes the
-``range_doppler`` product (DESIGN section 5) of the beams nearest to ``cones`` on those pings,
+``range_doppler`` product (docs/formats.md) of the beams nearest to ``cones`` on those pings,
 for the display.
 """
 

@@ -4,7 +4,7 @@ Conventions: element spectra X (F, C) are ordered from the forward end aft, elem
 x = x_0 − n δx; a plane wave from cone angle θ (u = cos θ) reaches element n with the phase
 factor exp(+j 2π f x_n u / c) (numpy's DFT sign), and a beam removes it:
 Y(θ, f) = Σ_n X_n(f) exp(−j 2π f (x_n − x̄) u / c) — thesis eq. (2.8) with the DFT sign of
-numpy. References in plain numpy sit in ``tests/test_synthetic_kernels.py``.
+numpy. References in plain numpy sit in ``tests/stages/beamform/test_synthetic_kernels.py``.
 """
 
 from __future__ import annotations

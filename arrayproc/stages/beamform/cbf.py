@@ -141,7 +141,40 @@ def check_frame_keys(stage: Stage) -> None:
 
 @register
 class CBF(Stage):
-    """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc."""
+    """Conventional beamformer in the frequency domain (thesis eq. 2.8); see module doc.
+
+    Examples
+    --------
+    Outside a chain: the keys are checked when the stage is made, and ``process`` turns time
+    blocks into beams. A 250 Hz plane wave reaching eight elements (0.75 m apart) at the same
+    time comes from broadside:
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from arrayproc import CBF, Recording, RecordingWriter
+    >>> from arrayproc.chain.reader import read_blocks
+    >>> cbf = CBF(nfft=256, beams={"start": 0.0, "stop": 180.0, "count": 19}, threads=1)
+    >>> cbf.hop  # 0 means nfft / 2
+    128
+    >>> CBF(nfft=256, beam=3)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    arrayproc.errors.ConfigError: stage 'cbf': unknown key 'beam' for type 'cbf' (known: ...)
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(tmp.name, "rec.h5")
+    >>> positions = np.zeros((8, 3)); positions[:, 0] = -0.75 * np.arange(8)
+    >>> wave = np.sin(2 * np.pi * 250.0 * np.arange(4096) / 1000.0)
+    >>> with RecordingWriter(path, 1000.0, 8, positions=positions) as w:
+    ...     w.append(np.repeat(wave[:, None], 8, axis=1).astype(np.float32))
+    >>> with Recording(path) as rec:
+    ...     block = next(cbf.process(read_blocks(rec, 1024, 1024)))
+    >>> block.data.shape  # (snapshots, bins, beams)
+    (31, 129, 19)
+    >>> power = (np.abs(block.data) ** 2).sum(axis=(0, 1))
+    >>> float(block.beams[np.argmax(power)])  # cone angle, deg
+    90.0
+    >>> tmp.cleanup()
+    """
 
     kind = "cbf"
     accepts = frozenset({Domain.TIME})
@@ -367,7 +400,7 @@ class CBF(Stage):
 
     def _back(self, part: int, chunks: Iterator[int], ops: tuple, y: np.ndarray) -> None:
         """Chunks of bins taken from ``chunks`` (first bin of each), for every snapshot: the
-        corner turn of the chunk into per-bin operands in cache (:func:`gather_bins`), one
+        corner turn of the chunk into per-bin operands in cache (``_kernels.gather_bins``), one
         real GEMM per bin and the unpack of its results into the beams (worker ``part``)."""
         w = self._results(part, y.shape[0], ops[0].shape[3])
         chunk, nf = w[0].shape[0], y.shape[1]

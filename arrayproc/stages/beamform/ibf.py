@@ -9,7 +9,7 @@ than ``stop_db`` above the noise estimate. Removing a wave at the elements remov
 sidelobes too.
 
 Output: the cleaned element spectra (domain ``("snapshot", "freq", "channel")``, see
-:mod:`arrayproc.stages._common`) for ``etam``/``psas`` downstream, and a products group
+:mod:`arrayproc.stages.beamform._common`) for ``etam``/``psas`` downstream, and a products group
 ``ibf_removed`` with one row per removed wave and snapshot: ``time`` (s), ``cone_deg``,
 ``level_db`` (the wave's in-band mean square at an element, dB re 1 µPa² for data in Pa,
 re FS² for data in full scale),

@@ -4,7 +4,7 @@ Reads the delays blocks of a ``tde`` stage. For a volumetric array the maximum-l
 position (:func:`.localise.localise_event`: ``scipy.optimize.least_squares`` from several
 starts, covariance (Jᵀ J)⁻¹ = (Hᵀ C⁻¹ H)⁻¹ optionally scaled by the fit, thesis eq. (C.8)),
 delays below ``min_corr`` rejected, events with fewer than ``min_pairs`` usable delays or a
-solution on the search box not localised. Products ``positions`` (DESIGN section 5): ``time``,
+solution on the search box not localised. Products ``positions`` (docs/formats.md): ``time``,
 ``x``, ``y``, ``z`` (m, world frame x east, y north, z down), ``cov`` (n, 3, 3) m²,
 ``tdoa_rms_s``, ``n_used``.
 

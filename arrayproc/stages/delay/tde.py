@@ -10,7 +10,7 @@ correlation, as accurate below 0.4 fs and cheaper, for per-snapshot use; ``parab
 ``method = "unwrap"``: phase-unwrapping LLS, eqs. (3.30)-(3.36) with app. B (:mod:`.unwrap`).
 σ per delay from the peak's curvature and the normalised correlation (:func:`.gcc.delay_sigma`).
 
-Products ``delays`` (DESIGN section 5): ``time`` (detection centre or snapshot centre, s),
+Products ``delays`` (docs/formats.md): ``time`` (detection centre or snapshot centre, s),
 ``tau``, ``sigma`` (n, n_ch) s, ``corr`` (n, n_ch); group attr ``reference``. Yields one
 delays block per row (:mod:`._common`) for the ``localise`` stage.
 """

@@ -2,7 +2,7 @@
 
 Detection by band energy over a running-median background (:mod:`.detect`). For every
 detection the stage writes a ``detections`` row (``time_start``, ``time_end``, ``freq_lo``,
-``freq_hi``, ``snr_db``, ``channel``; DESIGN section 5) and yields an event block: the samples
+``freq_hi``, ``snr_db``, ``channel``; docs/formats.md) and yields an event block: the samples
 of every channel over the detection's time box padded on each side by ``pad`` (default: the
 array's largest travel time between two elements plus one detection frame), clipped to the
 recording, so events at the start or end of a file still work. Memory is bounded by the

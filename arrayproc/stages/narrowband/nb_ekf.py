@@ -14,7 +14,7 @@ a cone bias of U cos² θ / c near end-fire (both measured in ``docs/validation/
 With ``baseline`` the per-sample CBF of thesis 3.2.1.1 (:mod:`.cbf_baseline`) is written too,
 as group ``<name>_cbf`` with ``filter`` = −1.
 
-Writes products ``nb_tracks`` (DESIGN section 5) at ``output_rate``: ``time`` s, ``cone_deg``,
+Writes products ``nb_tracks`` (docs/formats.md) at ``output_rate``: ``time`` s, ``cone_deg``,
 ``freq_hz`` (without own Doppler), ``sigma_cone_deg``, ``sigma_freq_hz``, ``filter`` (index of
 the staggered filter that gave the row). Blocks pass through unchanged.
 """

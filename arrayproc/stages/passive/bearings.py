@@ -31,7 +31,7 @@ keeps the ambiguous pair heading ∓ |β| with ``side`` 0. ``cone_deg`` is |β| 
 ``rel_bearing_deg`` is β (both columns optional in the schema, written for these beams only).
 
 Peaks are refined to sub-beam resolution by a parabola through the peak beam and its two
-neighbours (dB against cone angle). Rows (products ``bearings``, DESIGN section 4): ``time``
+neighbours (dB against cone angle). Rows (products ``bearings``, docs/formats.md): ``time``
 (s), ``cone_deg``, ``bearing_port_deg = heading − cone`` and ``bearing_stbd_deg = heading +
 cone`` (deg true, the left-right pair; heading of the array at the snapshot), ``level_db`` (dB
 re ``ref``², the thesis's unnormalised beam-power sums), ``snr_db`` (over the noise estimate),

@@ -1,4 +1,4 @@
-"""The result of one batch TMA solution (one row of the products ``tma`` kind, DESIGN section 5)
+"""The result of one batch TMA solution (one row of the products ``tma`` kind, docs/formats.md)
 and the global-then-local least-squares search the three methods share.
 
 The search is the thesis's (section 3.3.1: differential evolution, "much better results" than a

@@ -1,6 +1,6 @@
 """``arrayproc tma``: batch maximum-likelihood TMA over the measurements of a products file.
 
-Reads a ``bearings`` or ``delays`` group of a products file (DESIGN section 5) and the array's
+Reads a ``bearings`` or ``delays`` group of a products file (docs/formats.md) and the array's
 navigation and geometry from the recording (``/nav``, ``/array``; by default the recording the
 products file names as its ``source``), solves one batch per window, and writes a products
 file with one ``tma`` group (one row per solution: ``t0``, ``t1``, ``method``, ``x``, ``y``,

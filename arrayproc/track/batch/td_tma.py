@@ -14,7 +14,7 @@ product); missing delays (NaN) are left out.
 The global search is bounded around the bearings at the window's two ends (see
 :mod:`.result`), taken from the plane-wave directions that fit each snapshot's delays best
 (least squares, ``τ_n ≈ −(e_n − e_ref)·u / c``). A line array gives the cone angle only, so
-each end has two mirror bearings (``heading ∓ θ``, DESIGN section 3); with ``side = "auto"``
+each end has two mirror bearings (``heading ∓ θ``, docs/architecture.md); with ``side = "auto"``
 the choice at each end is a search coordinate (the source may cross the array's axis during
 a manoeuvre), with ``port`` or ``starboard`` it is fixed for both ends.
 

@@ -47,7 +47,7 @@ def initial_hypotheses(tau: np.ndarray, sigma: np.ndarray, elements: np.ndarray,
     own_vel : (2,) array
         Observer velocity (m/s), for the CV relative velocity.
     d : dict
-        The ``delays`` settings (:data:`DELAYS_DEFAULTS`).
+        The ``delays`` settings (:data:`~arrayproc.track.delays.config.DELAYS_DEFAULTS`).
 
     Returns
     -------

@@ -4,7 +4,7 @@ A :class:`Track` is created *tentative* by an initiator, becomes *confirmed* by 
 (:mod:`arrayproc.track.manage.initiate`) and ends *deleted* by a deletion rule
 (:mod:`arrayproc.track.manage.delete`). Every scan the manager appends one :class:`TrackPoint`
 (time, state, covariance, status, index of the measurement used or −1 when coasting) so that
-the whole life of a track can be written as ``tracks`` rows (DESIGN section 5).
+the whole life of a track can be written as ``tracks`` rows (docs/formats.md).
 
 The bookkeeping follows Blackman & Popoli, *Design and Analysis of Modern Tracking Systems*
 (1999), ch. 3 (track life cycle); it is written here because the state layout and the rows

@@ -1,4 +1,4 @@
-"""End to end (issue 15): simulated towed-array recording with a manoeuvre → ``process``
+"""End to end: simulated towed-array recording with a manoeuvre → ``process``
 (bearings; delays) → ``tma`` (bearings; delays). Minutes of simulation and processing: slow
 (the default tests check ``run_tma`` on synthetic products, test_batch_run.py).
 

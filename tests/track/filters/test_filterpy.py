@@ -1,4 +1,4 @@
-"""Our UKF against filterpy's UKF, step by step, on the L-R paper's Case I (issue 6)."""
+"""Our UKF against filterpy's UKF, step by step, on the L-R paper's Case I."""
 
 from __future__ import annotations
 

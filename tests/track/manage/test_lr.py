@@ -1,4 +1,4 @@
-"""Left-right resolution (L-R paper eqs. (9)-(13)) and the Monte Carlo engine (issue 6)."""
+"""Left-right resolution (L-R paper eqs. (9)-(13)) and the Monte Carlo engine."""
 
 from __future__ import annotations
 
@@ -135,7 +135,7 @@ def test_reduced_table_resolved_matches_known_side():
 
 @pytest.mark.slow
 def test_table_I_criteria_20000_runs():
-    """Issue 6 acceptance criteria that this reproduction meets, at 20,000 runs per entry:
+    """The acceptance criteria that this reproduction meets, at 20,000 runs per entry:
     resolved within 0.5 point of known-side, true side ≥ 99 % of the runs not lost, the EKF
     the worst filter in both cases."""
     for case in (1, 2):
