@@ -66,9 +66,13 @@ def test_td_solution_agrees_with_scipy_differential_evolution():
 
     import arrayproc.track.batch.result as R
 
+    import inspect
+    # scipy >= 1.15 takes the seed as ``rng`` (a Generator); older releases as ``seed``
+    key = "rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed"
+
     def scipy_evolve(cost, bounds, seed, popsize, maxiter, tol, mutation, recombination):
         de = differential_evolution(cost, bounds, vectorized=True, updating="deferred",
-                                    rng=seed, popsize=popsize, maxiter=maxiter, tol=tol,
+                                    **{key: seed}, popsize=popsize, maxiter=maxiter, tol=tol,
                                     atol=0.0, polish=False, init="sobol", mutation=mutation,
                                     recombination=recombination)
         return de
