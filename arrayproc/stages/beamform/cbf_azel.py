@@ -52,12 +52,12 @@ import numpy as np
 from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta
+from arrayproc.dsp.bands import check_nyquist
 from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform._azel_kernels import azel_power
 from arrayproc.stages.beamform._common import SpectraFramer
 from arrayproc.stages.beamform.cbf import WINDOWS
 from arrayproc.stages.beamform.checks import warn_spatial_aliasing
-from arrayproc.dsp.bands import check_nyquist
 
 LAGRANGE4 = 9.0 / 384.0  # max |Π (u − u_i)| / 4! of four equispaced nodes, central interval
 

@@ -10,8 +10,13 @@ from arrayproc.chain.block import Block, Pose
 from arrayproc.chain.domains import Domain, TimeMeta
 from arrayproc.errors import ConfigError
 from arrayproc.sim.scenario import tetrahedron
-from arrayproc.stages.beamform.cbf_azel import (CBFAzEl, azel_power_reference, lag_step,
-                                                world_directions)
+from arrayproc.stages.beamform._common import SpectraFramer
+from arrayproc.stages.beamform.cbf_azel import (
+    CBFAzEl,
+    azel_power_reference,
+    lag_step,
+    world_directions,
+)
 
 C = 1500.0
 FS = 8000.0
@@ -77,7 +82,7 @@ def test_tetrahedron_pattern_is_the_closed_form(az0, el0, heading):
         assert abs((az - az0 + 180) % 360 - 180) * np.cos(np.deg2rad(el0)) <= 2.0
 
 
-@pytest.mark.filterwarnings("ignore:stage .cbf_azel.: key .band. reaches")
+@pytest.mark.filterwarnings("ignore:stage .cbf_azel.. key .band. reaches")
 @pytest.mark.parametrize("accuracy", [1e-3, 1e-5])
 def test_lag_interpolation_within_its_bound_against_numpy(rng, accuracy):
     """Broadband noise on a 6-element array: the stage against eq. (1) evaluated directly,
@@ -88,7 +93,6 @@ def test_lag_interpolation_within_its_bound_against_numpy(rng, accuracy):
     st, p, out = run(x, pos, None, nfft=1024, hop=512, window="hann", band=[50, 3000],
                      azimuth=[0, 360, 6], elevation=[-90, 90, 6], accuracy=accuracy, batch=3)
     spec_blocks = []
-    from arrayproc.stages.beamform._common import SpectraFramer
     fr = SpectraFramer(1024, 512, "hann", (50, 3000))
     for b in blocks_of(x, pos):
         s = fr.push(b)
