@@ -53,6 +53,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta
 from arrayproc.dsp.bands import check_nyquist
+from arrayproc.dsp.blas_threads import set_local_threads
 from arrayproc.errors import ConfigError
 from arrayproc.stages.beamform._azel_kernels import azel_power
 from arrayproc.stages.beamform._common import SpectraFramer
@@ -119,7 +120,7 @@ class CBFAzEl(Stage):
                            check=_elev_key),
         "accuracy": Param("float", 1e-4, "bound of the lag interpolation error, a fraction "
                           "of a coherent plane wave's power (eq. 3)", check=positive),
-        "batch": Param("int", 16, "snapshots per GEMM batch (and per output block)",
+        "batch": Param("int", 64, "snapshots per GEMM batch (and per output block)",
                        check=positive),
     }
 
@@ -162,20 +163,39 @@ class CBFAzEl(Stage):
         self._lagmat = np.ascontiguousarray(np.vstack([np.cos(ph), np.sin(ph)]), np.float32)
 
     def pair_correlations(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(Re ρ (S, P, M) float32 on the lag grid, Σ_n Σ_f |X_n|² (S,)) of spectra (S, F, C)."""
+        """(Re ρ (P, M, S) float32 on the lag grid, Σ_n Σ_f |X_n|² (S,)) of spectra (S, F, C)
+        (eq. 2): one real GEMM of [Re G, Im G] against [cos; sin] over all pairs and
+        snapshots, G = X_m X_n*."""
         m, n = self._pairs
         g = x[:, :, m] * np.conj(x[:, :, n])  # (S, F, P)
-        ops = np.concatenate([g.real, g.imag], axis=1).transpose(0, 2, 1)  # (S, P, 2F)
-        rho = np.ascontiguousarray(ops, np.float32) @ self._lagmat
+        n_s, n_p = x.shape[0], m.size
+        ops = np.empty((n_p, n_s, 2 * x.shape[1]), np.float32)  # (P, S, 2F)
+        gt = g.transpose(2, 0, 1)
+        ops[:, :, :x.shape[1]] = gt.real
+        ops[:, :, x.shape[1]:] = gt.imag
+        old = set_local_threads(1)  # a small GEMM: threaded BLAS only adds contention
+        try:
+            rho = ops.reshape(n_p * n_s, -1) @ self._lagmat  # one 2-D GEMM: (P·S, M)
+        finally:
+            if old is not None:
+                set_local_threads(old)
         auto = (x.real.astype(np.float64) ** 2 + x.imag.astype(np.float64) ** 2).sum((1, 2))
-        return rho, auto
+        return np.ascontiguousarray(rho.reshape(n_p, n_s, -1).transpose(0, 2, 1)), auto
 
     def power(self, x: np.ndarray, headings_deg: np.ndarray) -> np.ndarray:
-        """Band power (S, D) float32 of spectra (S, F, C) at headings (S,) deg (eq. 2)."""
-        rho, auto = self.pair_correlations(x)
+        """Band power (S, D) float32 of spectra (S, F, C) at headings (S,) deg (eq. 2): the
+        snapshots of each distinct heading in one kernel call (one call for a fixed array)."""
+        heads = np.asarray(headings_deg, float)
         out = np.empty((x.shape[0], self._grid.shape[0]), np.float32)
-        azel_power(rho, self._lag0, self._dlag, self._base, auto, self._grid,
-                   np.deg2rad(np.asarray(headings_deg, float)), out)
+        for h in np.unique(heads):
+            sel = np.flatnonzero(heads == h)
+            rho, auto = self.pair_correlations(x[sel])
+            part = out if sel.size == x.shape[0] else np.empty((sel.size, out.shape[1]),
+                                                                np.float32)
+            azel_power(rho, self._lag0, self._dlag, self._base, auto, self._grid,
+                       float(np.deg2rad(h)), part)
+            if part is not out:
+                out[sel] = part
         return out
 
     def process(self, blocks: Iterator[Block]) -> Iterator[Block]:
