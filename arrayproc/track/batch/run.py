@@ -215,8 +215,8 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
     ``heading`` (rad; heading = the port/starboard pair's mean, cone = half their
     difference), ``port``, ``stbd`` (rad), and ``azimuth`` (rad) when the group has
     ``azimuth_deg`` (a volumetric/planar array's rows, which ``compact`` then reads; port and
-    starboard default to it when absent), else None. Delays: ``time``, ``tau`` (n, n_ch) s, ``sigma``
-    (n, n_ch) s or None, ``reference``.
+    starboard default to it when absent), else None. Delays: ``time``, ``tau`` (n, n_ch) s,
+    ``sigma`` (n, n_ch) s or None, ``reference``.
 
     Parameters
     ----------
