@@ -25,6 +25,9 @@ i.e. at most ``accuracy`` times the power of a perfectly coherent plane wave (th
 power the snapshot can give); δ is chosen from ``accuracy`` and the band's top frequency.
 The cost per snapshot is pairs × lags × bins for the GEMM plus pairs × directions for the
 grid, against channels × directions × bins for eq. (1) directly (``azel_power_reference``).
+The snapshots of a batch that share one heading go through one GEMM and one kernel call
+(a fixed or bottom-mounted array: the whole batch); a heading that changes from snapshot to
+snapshot costs one call per snapshot (slower, same result). ``scripts/bench_azel.py`` times it.
 
 Directions: ``azimuth = [lo, hi, step]`` deg, true azimuth clockwise from north, turned into
 the body frame with the array heading of each snapshot (the recording's navigation, else the
