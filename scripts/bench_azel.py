@@ -103,7 +103,8 @@ def main() -> None:
             print(f"{r['hydrophones']} hydrophones, {r['directions']} directions, "
                   f"{r['bins']} bins, {r['snapshots']} snapshots of {args.nfft}/{args.hop}: "
                   f"stage {r['stage_x_realtime']:.0f}x real time (wall {r['stage_wall_s']:.3f} s, "
-                  f"CPU {r['stage_cpu_s']:.3f} s: {r['stage_x_realtime_cpu']:.0f}x); numpy reference {r['ref_x_realtime']:.2f}x "
+                  f"CPU {r['stage_cpu_s']:.3f} s: {r['stage_x_realtime_cpu']:.0f}x); "
+                  f"numpy reference {r['ref_x_realtime']:.2f}x "
                   f"real time (CPU {r['ref_cpu_per_snapshot_s'] * 1e3:.0f} ms/snapshot); "
                   f"ratio {r['ratio']:.0f}; max diff {r['max_rel_diff']:.1e} of the coherent "
                   f"power (bound {r['accuracy']:g})")
