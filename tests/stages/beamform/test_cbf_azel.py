@@ -72,10 +72,10 @@ def test_tetrahedron_pattern_is_the_closed_form(az0, el0, heading):
     rel = pos - pos.mean(0)
     ph = 2 * np.pi * f0 / C * ((k0[None, :] - body) @ rel.T)
     closed = (nfft * 2.0 / 2) ** 2 * np.abs(np.exp(1j * ph).sum(1)) ** 2
-    # float32 frames, FFT and GEMM: relative rounding ~1e-7 per operation on sums of a few
-    # hundred terms, against the coherent peak power; accuracy (1e-8) bounds the interpolation
+    # float32 frames, FFT and GEMM (unit roundoff 6e-8, sums of a few hundred terms): measured
+    # 2.3e-7 of the coherent peak power at most; accuracy (1e-8) bounds the interpolation
     for row in p:
-        np.testing.assert_allclose(row, closed, rtol=0, atol=2e-5 * closed.max())
+        np.testing.assert_allclose(row, closed, rtol=0, atol=1e-6 * closed.max())
         i = int(np.argmax(row))
         az, el = st.beam_axis[i]
         assert abs(el - el0) <= 2.0
