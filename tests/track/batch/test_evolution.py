@@ -64,9 +64,9 @@ def test_td_solution_agrees_with_scipy_differential_evolution():
     y = delay_model(x, tr.time, el, 0, 1500.0) + rng.normal(0, 1e-4, (tr.time.size, 32))
     ours = solve_delays(tr.time, y, el, 1e-4, heading_rad=tr.heading, seed=3)
 
-    import arrayproc.track.batch.result as R
-
     import inspect
+
+    import arrayproc.track.batch.result as R
     # scipy >= 1.15 takes the seed as ``rng`` (a Generator); older releases as ``seed``
     key = "rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed"
 
