@@ -29,7 +29,8 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-from tests.chain.test_follow import _chain, _same_products  # noqa: E402
+from arrayproc.evaluate.compare import same_products  # noqa: E402
+from arrayproc.evaluate.scenarios.follow import follow_chain  # noqa: E402
 
 WRITER = REPO / "tests" / "chain" / "live_writer.py"
 
@@ -43,7 +44,7 @@ def main() -> int:
     a = ap.parse_args()
     env = dict(os.environ, PYTHONPATH=str(REPO))
     tmp = Path(tempfile.mkdtemp(prefix="bench_follow."))
-    chain, rec, live, log = _chain(tmp), tmp / "rec.h5", tmp / "live.h5", tmp / "writer.json"
+    chain, rec, live, log = follow_chain(tmp), tmp / "rec.h5", tmp / "live.h5", tmp / "writer.json"
     load0 = os.getloadavg()
     w = subprocess.Popen([sys.executable, str(WRITER), str(rec), str(log), str(a.seconds),
                           str(a.chunk), str(a.chunk), "0", str(live)], stdout=subprocess.PIPE,
@@ -80,7 +81,7 @@ def main() -> int:
     whole = tmp / "whole.h5"
     subprocess.run([sys.executable, "-m", "arrayproc", "process", str(rec), "-c", str(chain),
                     "-o", str(whole), "--no-progress", "-q"], check=True, env=env)
-    n_same = _same_products(live, whole)
+    n_same = same_products(live, whole)
     q = np.percentile(live_rows, [5, 50, 95]) if live_rows.size else [np.nan] * 3
     res = {"seconds": a.seconds, "chunk_s": a.chunk, "poll_s": a.poll, "rows": int(t_all.size),
            "rows_timed": int(live_rows.size), "latency_s": {"p5": q[0], "median": q[1],

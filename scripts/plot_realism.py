@@ -17,9 +17,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.sim import test_sim_multipath as tm  # noqa: E402
-from tests.sim import test_sim_reverb as trv  # noqa: E402
-from tests.stages import test_threaded_shape as tt  # noqa: E402
+from arrayproc.evaluate.scenarios import realism as rz  # noqa: E402
 
 
 def lloyd(ax) -> None:
@@ -27,10 +25,10 @@ def lloyd(ax) -> None:
     from arrayproc.sim.sources import tonal_amplitude
     zs, zr, f, fs = 20.0, 50.0, 1000.0, 4096.0
     r = np.linspace(100.0, 3000.0, 600)
-    sim = Simulator(tm.ranged_scenario(r, zs, zr, {"surface": True, "order": 1}))
+    sim = Simulator(rz.ranged_scenario(r, zs, zr, {"surface": True, "order": 1}))
     x = sim.render(0, 2048).astype(float)
-    meas = 20 * np.log10(np.abs(tm.tonal_phasor(x, f, fs)) / tonal_amplitude(120.0))
-    cf = 20 * np.log10(np.abs(tm.two_path(r, zs, zr, f, -1.0)))
+    meas = 20 * np.log10(np.abs(rz.tonal_phasor(x, f, fs)) / tonal_amplitude(120.0))
+    cf = 20 * np.log10(np.abs(rz.two_path(r, zs, zr, f, -1.0)))
     ax.plot(r, cf, "k-", lw=2.5, alpha=0.35, label="two-path closed form")
     ax.plot(r, meas, "C0.", ms=2.5, label="simulated (600 hydrophones)")
     ax.plot(r, -20 * np.log10(r), "C3--", lw=1, label="free field, −20 log10 r")
@@ -45,7 +43,7 @@ def shape(ax, ax2, tmp: Path) -> None:
     from arrayproc.geo.threading import threaded_positions
     from arrayproc.io.recording import Recording
     from arrayproc.sim.run import simulate_file
-    (tmp / "s.toml").write_text(tt.scenario(100.0))
+    (tmp / "s.toml").write_text(rz.turn_scenario(100.0))
     rec_path = simulate_file(tmp / "s.toml", tmp / "rec.h5")
     with Recording(rec_path) as rec:
         truth = rec.read_group("truth/array")
@@ -86,15 +84,15 @@ def reverb(ax, seeds: int) -> None:
     depth, zr, mu_db, pulse, half = 100.0, 20.0, -27.0, 0.01, 700.0
     rv = {"boundary": "bottom", "depth": depth, "scattering_strength_db": mu_db,
           "density": 0.002, "area": [-half, half, -half, half]}
-    dur = 0.1 + 2 * 650.0 / trv.C + 0.05
+    dur = 0.1 + 2 * 650.0 / rz.C + 0.05
     p2 = []
     for seed in range(seeds):
-        sim = Simulator(parse_scenario(trv.active({"reverberation": [rv]}, dur, seed, pulse,
+        sim = Simulator(parse_scenario(rz.active_scenario({"reverberation": [rv]}, dur, seed, pulse,
                                                   zr)))
         p2.append(sim.render(0, sim.n_samples)[:, 0].astype(float) ** 2)
     p2 = np.mean(p2, axis=0)
-    t = np.arange(p2.size) / trv.FS - 0.1
-    cf = trv.sonar_equation_intensity(t, 200.0, mu_db, depth, zr, pulse)
+    t = np.arange(p2.size) / rz.FS - 0.1
+    cf = rz.sonar_equation_intensity(t, 200.0, mu_db, depth, zr, pulse)
     k = 41  # 10 ms running mean
     sm = np.convolve(p2, np.ones(k) / k, mode="same")
     sel = t > 0.12

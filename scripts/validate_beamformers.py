@@ -39,14 +39,19 @@ from scipy.optimize import brentq
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from arrayproc.evaluate.scenarios.beamformers import (  # noqa: E402
+    closed_form,
+    exact_cov,
+    rejection_closed_form,
+    resolved,
+    rmse_ratio,
+    source_spectra,
+)
 from arrayproc.io.geometry import line_array, triplet_array, twin_line_array  # noqa: E402
+from arrayproc.sim import snapshot_spectra as syn  # noqa: E402
 from arrayproc.stages.beamform.lr_cbf import LRCBF, mirror_correlation, null_depth  # noqa: E402
 from arrayproc.stages.beamform.music import MUSIC  # noqa: E402
 from arrayproc.stages.beamform.mvdr import MVDR  # noqa: E402
-from tests.stages.beamform import adaptive_synth as syn  # noqa: E402
-from tests.stages.beamform.test_lr_cbf import rejection_closed_form, source_spectra  # noqa: E402
-from tests.stages.beamform.test_music import rmse_ratio  # noqa: E402
-from tests.stages.beamform.test_mvdr import closed_form, exact_cov, resolved  # noqa: E402
 
 C = syn.C
 N, DX = 32, 0.75
@@ -248,13 +253,15 @@ def part_e2e(out: Path) -> dict:
     from arrayproc.chain import build_chain, run_chain
     from arrayproc.chain.block import Block
     from arrayproc.chain.domains import Domain, TimeMeta
+    from arrayproc.evaluate.chains import chain_toml
+    from arrayproc.evaluate.scenarios.beamformers import LR_TRIPLET_SCENARIO as SCENARIO
     from arrayproc.io.products import ProductsWriter, read_products
     from arrayproc.io.recording import Recording
     from arrayproc.sim.run import simulate_file
+    from arrayproc.stages import load_all
     from arrayproc.stages.beamform._common import SpectraFramer
-    from tests.conftest import chain_toml
-    from tests.stages.beamform.test_lr_chain import SCENARIO
 
+    load_all()  # every stage type, for the chain built below
     band = (800.0, 1200.0)
     recs = {}
     for name, text in (("with", SCENARIO), ("noise", SCENARIO.split("[[source]]")[0])):

@@ -1,14 +1,14 @@
 """Re-validation of the passive chain in a realistic ocean (docs/validation/realism.md).
 
-- Passive end to end (the set-up of tests/stages/test_passive_e2e.py: 32 hydrophones, two
-  tonal sources and one broadband source at −10 dB per hydrophone, chain
+- Passive end to end (the set-up of arrayproc/evaluate/scenarios/thesis_passive.py: 32
+  hydrophones, two tonal sources and one broadband source at −10 dB per hydrophone, chain
   data/chains/passive_e2e.toml) in the free field and with image-source multipath
   (pressure-release surface; surface + 200 m bottom with 6 dB loss): detection fraction and
   bearing RMS per source, the LOFAR line within one bin, and the range (max − min) of the
   multipath field level at the source's frequency over the run (Lloyd's-mirror fading; the
   broadband source at its band centre), from /truth.
 - Bearings through a turn with a water-pulled array, rigid against threaded geometry
-  (the set-up of tests/stages/test_threaded_shape.py).
+  (the set-up of arrayproc/evaluate/scenarios/realism.py).
 
     .venv/bin/python scripts/validate_realism.py [--e2e 50] [--json OUT]
 """
@@ -26,8 +26,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.stages import test_passive_e2e as te  # noqa: E402
-from tests.stages import test_threaded_shape as tt  # noqa: E402
+from arrayproc.evaluate.scenarios import realism as rz  # noqa: E402
+from arrayproc.evaluate.scenarios import thesis_passive as te  # noqa: E402
 
 OCEANS = {
     "free field": "",
@@ -62,7 +62,7 @@ def e2e(duration: float, multipath: str, d: Path, noise_up_db: float = 0.0,
     spec = load_chain(str(te.CHAIN))
     with Recording(rec) as r, ProductsWriter(prod, source=str(rec), chain=spec.text) as w:
         run_chain(r, spec, w)
-    res = te.evaluate(rec, read_products(prod))
+    res = te.score_e2e(rec, read_products(prod))
     with Recording(rec) as r:  # received tonal level swing at the reference point
         src = r.read_group("truth/sources")
         for name, *_, tonal in te.SOURCES:
@@ -197,15 +197,15 @@ def main() -> None:
             return _dump(out, args.json)
         d = Path(tmp) / "turn"
         d.mkdir()
-        (d / "s.toml").write_text(tt.scenario())
+        (d / "s.toml").write_text(rz.turn_scenario())
         from arrayproc.sim.run import simulate_file
         rec = simulate_file(d / "s.toml", d / "rec.h5")
         rows = {}
         for shape in ("rigid", "threaded"):
-            t, e = tt.bearing_errors(rec, shape, d)
+            t, e = rz.turn_bearing_errors(rec, shape, d)
             L = 31 * 1.5
-            turn = (t > tt.T_TURN + L / tt.V) & (t < 95.0)
-            straight = t < tt.T_TURN - 4.0
+            turn = (t > rz.T_TURN + L / rz.TURN_V) & (t < 95.0)
+            straight = t < rz.T_TURN - 4.0
             rows[shape] = {"turn_rms_deg": float(np.sqrt(np.mean(e[turn] ** 2))),
                            "turn_bias_deg": float(np.mean(e[turn])),
                            "straight_rms_deg": float(np.sqrt(np.mean(e[straight] ** 2))),

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from arrayproc.evaluate.chains import cbf_stage, chain_toml  # noqa: F401  (the tests' import point)
 from arrayproc.io.recording import RecordingWriter
 from arrayproc.stages import load_all
 
@@ -31,35 +32,6 @@ def write_recording(path: Path, data: np.ndarray, fs: float = 1000.0,
         if nav is not None:
             w.set_nav(**nav)
     return path
-
-
-def _toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return f'"{v}"'
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    return repr(float(v)) if isinstance(v, float) else str(v)
-
-
-def chain_toml(*stages: dict, block: int | None = None) -> str:
-    """A chain file's text from stage tables, e.g. ``chain_toml(CBF_BEAMS, {"type": "btr"})``:
-    the tests build their chains from these pieces instead of copying TOML strings."""
-    out = [] if block is None else ["[input]", f"block = {block}"]
-    for st in stages:
-        out.append("[[stage]]")
-        out += [f"{k} = {_toml_value(v)}" for k, v in st.items()]
-    return "\n".join(out) + "\n"
-
-
-def cbf_stage(nfft: int, band: list[float], count: int, **kw) -> dict:
-    """A CBF stage table over cone angles 0-180 deg with a Hann taper (hop = nfft unless
-    given)."""
-    return {"type": "cbf", "nfft": nfft, "hop": kw.pop("hop", nfft), "window": "hann",
-            "band": band, "beams": {"start": 0.0, "stop": 180.0, "count": count}, **kw}
 
 
 @pytest.fixture

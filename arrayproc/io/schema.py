@@ -99,11 +99,15 @@ _KINDS = [
         "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)",
                         trailing=_ANY2, labels=(_BEAMS, ("freq",))),
     }, {**_BEAM_AXES, "freq": _c("Hz", "frequency of each bin")}),
-    Kind("bearings", "peak on a BTR row or a LOFAR line", {
+    Kind("bearings", "peak on a BTR row or a LOFAR line, or a 2-D peak of azimuth × "
+         "elevation beams", {
         "time": _c("s", "centre time of the snapshot"),
-        "cone_deg": _c("deg", "cone angle of the peak (0 forward end-fire)"),
-        "bearing_port_deg": _c("deg", "true bearing if the source is to port"),
-        "bearing_stbd_deg": _c("deg", "true bearing if the source is to starboard"),
+        "cone_deg": _c("deg", "cone angle of the peak (0 forward end-fire); line arrays, and "
+                       "the angle off body x for volumetric/planar arrays"),
+        "bearing_port_deg": _c("deg", "true bearing if the source is to port (line arrays); "
+                               "the azimuth for volumetric/planar arrays"),
+        "bearing_stbd_deg": _c("deg", "true bearing if the source is to starboard (line "
+                               "arrays); the azimuth for volumetric/planar arrays"),
         "level_db": _c("dB re 1 µPa", "received level"),
         "snr_db": _c("dB", "peak over the TPSW background"),
         "freq_lo": _c("Hz", "lower edge of the band or line"),
@@ -113,6 +117,13 @@ _KINDS = [
                               "(relative-bearing beams)", False),
         "side": _c("", "+1 starboard, −1 port: resolved by the beams; 0 ambiguous "
                    "(relative-bearing beams)", False),
+        "azimuth_deg": _c("deg", "true azimuth of the peak, clockwise from north (relative "
+                          "to body x without a heading); volumetric/planar arrays "
+                          "(azimuth × elevation beams)", False),
+        "elevation_deg": _c("deg", "elevation of the peak, positive up; volumetric/planar "
+                            "arrays", False),
+        "sigma_deg": _c("deg", "σ of the azimuth from the peak's curvature and SNR; "
+                        "volumetric/planar arrays", False),
     }),
     Kind("doa", "root-MUSIC direction of one bin of a covariance group", {
         "time": _c("s", "mean centre time of the group's snapshots"),

@@ -446,8 +446,39 @@ def load_scenario(path: str | Path) -> Scenario:
 
 def parse_scenario(data: dict, file: str = "<scenario>",
                    base_dir: Path | None = None) -> Scenario:
-    """Validate a scenario given as a dict (as loaded from TOML)."""
+    """Validate a scenario given as a dict (as loaded from TOML): the tables in file order,
+    then the checks across tables (waveguide, BELLHOP, tonal drift)."""
     root = _Table(data, "", file)
+    fs, duration, c, seed, start_time, chunk, truth_interval, nav_interval = _recording(root)
+    array, at = _array(root)
+    own, own_static = _ownship(root, c)
+    if array.shape == "water_pulled" and min(
+            [sg.speed for sg in own.segments] or [0.0]) <= 0:
+        raise at.err("shape", "water_pulled needs an ownship moving at speed > 0 on every "
+                     "leg (the elements follow the path the tow point took)")
+    sources = _sources(root, fs, c, file)
+    prop = _propagation(root, c, base_dir)
+    noise = _noise(root, fs, own, sources, file)
+    active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
+    root.done()
+    if prop.multipath is not None:
+        _check_waveguide(prop.multipath, array, sources, active, file)
+    if prop.bellhop is not None:
+        if active is not None:
+            raise ConfigError(f"{file}: [propagation] multipath = \"bellhop\" is for passive "
+                              "sources only (active echoes: use the image-source table)")
+        _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
+                         None, file)
+        if prop.bellhop.freq is None:
+            prop.bellhop.freq = _bellhop_freq(sources)
+    _check_drift(sources, duration, fs, file)
+    return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
+                    nav_interval, array, own, own_static, sources, prop, noise, active)
+
+
+def _recording(root: _Table) -> tuple:
+    """``[recording]``: (fs, duration, sound speed, seed, start time, chunk, truth and nav
+    intervals)."""
     rec = root.sub("recording", required=True)
     fs = rec.num("fs", required=True, positive=True)
     duration = rec.num("duration", required=True, positive=True)
@@ -463,8 +494,12 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     truth_interval = rec.num("truth_interval", 1.0, positive=True)
     nav_interval = rec.num("nav_interval", 1.0, positive=True)
     rec.done()
+    return fs, duration, c, seed, start_time, chunk, truth_interval, nav_interval
 
-    # array
+
+def _array(root: _Table) -> tuple[ArraySpec, _Table]:
+    """``[array]``: the element layout of its ``type`` and the error and shape keys; the
+    spec and the table (for messages about it)."""
     at = root.sub("array", required=True)
     kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron", "twin",
                                              "triplet"))
@@ -488,21 +523,22 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                       at.num("lateral_snapshot", 1.0, positive=True),
                       at.str_("shape", "rigid", choices=("rigid", "water_pulled")))
     at.done()
+    return array, at
 
-    # ownship
+
+def _ownship(root: _Table, c: float) -> tuple[Trajectory, bool]:
+    """``[ownship]``: its trajectory and whether it is static (no table: at the origin)."""
     ot = root.sub("ownship")
     if ot is None:
-        own, own_static = Trajectory.static((0.0, 0.0), 0.0), True
-    else:
-        own, own_static = _trajectory(ot)
-        _check_speed(ot, own, c)
-        ot.done()
-    if array.shape == "water_pulled" and min(
-            [sg.speed for sg in own.segments] or [0.0]) <= 0:
-        raise at.err("shape", "water_pulled needs an ownship moving at speed > 0 on every "
-                     "leg (the elements follow the path the tow point took)")
+        return Trajectory.static((0.0, 0.0), 0.0), True
+    own, own_static = _trajectory(ot)
+    _check_speed(ot, own, c)
+    ot.done()
+    return own, own_static
 
-    # sources
+
+def _sources(root: _Table, fs: float, c: float, file: str) -> list[SourceSpec]:
+    """The ``[[source]]`` tables: unique plain names, a trajectory, tonals or broadband."""
     sources: list[SourceSpec] = []
     names: set[str] = set()
     for i, st in enumerate(root.subs("source")):
@@ -522,74 +558,76 @@ def parse_scenario(data: dict, file: str = "<scenario>",
         if not tonals and bb is None:
             raise ConfigError(f"{file}: [{st.where}]: a source needs tonals or [broadband]")
         sources.append(SourceSpec(name, traj, depth, tonals, bb))
+    return sources
 
-    # propagation
+
+def _propagation(root: _Table, c: float, base_dir: Path | None) -> Propagation:
+    """``[propagation]``: the loss law (a TL table from a file or inline), multipath."""
     prop = Propagation()
     pt = root.sub("propagation")
-    if pt is not None:
-        prop.loss = pt.str_("loss", "spherical", choices=("spherical", "cylindrical", "table"))
-        prop.transition_range = pt.num("transition_range", 1.0, positive=True)
-        if prop.loss == "table":
-            if pt.has("file"):
-                f = Path(pt.str_("file"))
-                if not f.is_absolute() and base_dir is not None:
-                    f = base_dir / f
-                if not f.exists():
-                    raise pt.err("file", f"no such TL table {str(f)!r}")
-                prop.table_path = str(f)
-            else:
-                r = pt.vec("range_m", required=True)
-                tl = pt.vec("tl_db", required=True)
-                if r.size != tl.size or r.size < 2 or np.any(np.diff(r) <= 0):
-                    raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
-                                 "and range_m must increase")
-                prop.table_range, prop.table_tl = r, tl
-        if pt.has("multipath") and pt.raw("multipath") == "bellhop":
-            prop.bellhop = _bellhop(pt, prop.loss, c)
-        elif pt.has("multipath"):
-            prop.multipath = _multipath(pt, prop.loss)
-        if pt.has("bellhop") and prop.bellhop is None:
-            raise pt.err("bellhop", "only with multipath = \"bellhop\"")
-        pt.done()
+    if pt is None:
+        return prop
+    prop.loss = pt.str_("loss", "spherical", choices=("spherical", "cylindrical", "table"))
+    prop.transition_range = pt.num("transition_range", 1.0, positive=True)
+    if prop.loss == "table":
+        if pt.has("file"):
+            f = Path(pt.str_("file"))
+            if not f.is_absolute() and base_dir is not None:
+                f = base_dir / f
+            if not f.exists():
+                raise pt.err("file", f"no such TL table {str(f)!r}")
+            prop.table_path = str(f)
+        else:
+            r = pt.vec("range_m", required=True)
+            tl = pt.vec("tl_db", required=True)
+            if r.size != tl.size or r.size < 2 or np.any(np.diff(r) <= 0):
+                raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
+                             "and range_m must increase")
+            prop.table_range, prop.table_tl = r, tl
+    if pt.has("multipath") and pt.raw("multipath") == "bellhop":
+        prop.bellhop = _bellhop(pt, prop.loss, c)
+    elif pt.has("multipath"):
+        prop.multipath = _multipath(pt, prop.loss)
+    if pt.has("bellhop") and prop.bellhop is None:
+        raise pt.err("bellhop", "only with multipath = \"bellhop\"")
+    pt.done()
+    return prop
 
-    # noise (+ tow ship)
-    noise = None
+
+def _noise(root: _Table, fs: float, own: Trajectory, sources: list[SourceSpec],
+           file: str) -> NoiseSpec | None:
+    """``[noise]``: a flat level or a spectrum; its ``[noise.towship]`` is appended to
+    ``sources`` as a source following the ownship's path ``distance`` m ahead."""
     nt = root.sub("noise")
-    if nt is not None:
-        lvl = nt.num("level_db", None)
-        spec = nt.matrix("spectrum", 2)
-        if lvl is not None and spec is not None:
-            raise nt.err("spectrum", "give level_db (flat) or spectrum, not both")
-        if spec is not None and (np.any(spec[:, 0] <= 0) or np.any(np.diff(spec[:, 0]) <= 0)):
-            raise nt.err("spectrum", "frequencies must be > 0 and increasing")
-        if lvl is not None or spec is not None:
-            noise = NoiseSpec(lvl, spec)
-        tt = nt.sub("towship")
-        if tt is not None:
-            dist = tt.num("distance", 300.0)
-            depth = tt.num("depth", 5.0)
-            tonals = _tonals(tt, fs)
-            bb = _broadband(tt.sub("broadband"), fs)
-            tt.done()
-            if not tonals and bb is None:
-                raise ConfigError(f"{file}: [{tt.where}]: the tow ship needs tonals or "
-                                  "[broadband]")
-            sources.append(SourceSpec("towship", own, depth, tonals, bb, lead=dist,
-                                      kind="towship"))
-        nt.done()
+    if nt is None:
+        return None
+    noise = None
+    lvl = nt.num("level_db", None)
+    spec = nt.matrix("spectrum", 2)
+    if lvl is not None and spec is not None:
+        raise nt.err("spectrum", "give level_db (flat) or spectrum, not both")
+    if spec is not None and (np.any(spec[:, 0] <= 0) or np.any(np.diff(spec[:, 0]) <= 0)):
+        raise nt.err("spectrum", "frequencies must be > 0 and increasing")
+    if lvl is not None or spec is not None:
+        noise = NoiseSpec(lvl, spec)
+    tt = nt.sub("towship")
+    if tt is not None:
+        dist = tt.num("distance", 300.0)
+        depth = tt.num("depth", 5.0)
+        tonals = _tonals(tt, fs)
+        bb = _broadband(tt.sub("broadband"), fs)
+        tt.done()
+        if not tonals and bb is None:
+            raise ConfigError(f"{file}: [{tt.where}]: the tow ship needs tonals or "
+                              "[broadband]")
+        sources.append(SourceSpec("towship", own, depth, tonals, bb, lead=dist,
+                                  kind="towship"))
+    nt.done()
+    return noise
 
-    active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
-    root.done()
-    if prop.multipath is not None:
-        _check_waveguide(prop.multipath, array, sources, active, file)
-    if prop.bellhop is not None:
-        if active is not None:
-            raise ConfigError(f"{file}: [propagation] multipath = \"bellhop\" is for passive "
-                              "sources only (active echoes: use the image-source table)")
-        _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
-                         None, file)
-        if prop.bellhop.freq is None:
-            prop.bellhop.freq = _bellhop_freq(sources)
+
+def _check_drift(sources: list[SourceSpec], duration: float, fs: float, file: str) -> None:
+    """Every drifting tonal stays inside (0, passband] Hz to the end of the recording."""
     for sp in sources:
         for i, ton in enumerate(sp.tonals):
             f_end = ton.freq + ton.drift_hz_per_s * duration
@@ -597,8 +635,6 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                 raise ConfigError(f"{file}: source {sp.name!r} tonal {i}: drift_hz_per_s takes "
                                   f"the tonal to {f_end:g} Hz by the end, outside (0, "
                                   f"{PASSBAND * fs:g}] Hz")
-    return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
-                    nav_interval, array, own, own_static, sources, prop, noise, active)
 
 
 def _waveform(t: _Table, fs: float, file: str) -> Any:

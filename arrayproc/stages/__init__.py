@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 TYPES: dict[str, str] = {
     "dft_filter": "arrayproc.stages.condition.dft_filter",
     "cbf": "arrayproc.stages.beamform.cbf",
+    "cbf_azel": "arrayproc.stages.beamform.cbf_azel",
     "ibf": "arrayproc.stages.beamform.ibf",
     "psas": "arrayproc.stages.beamform.etam",
     "etam": "arrayproc.stages.beamform.etam",

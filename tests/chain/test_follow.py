@@ -19,22 +19,13 @@ import pytest
 
 from arrayproc.app.commands import latency_line, process
 from arrayproc.chain.reader import count_blocks
+from arrayproc.evaluate.compare import same_products
+from arrayproc.evaluate.scenarios.follow import BLOCK, follow_chain
 from arrayproc.io.recording import Recording
-from tests.conftest import REPO, cbf_stage, chain_toml
+from tests.conftest import REPO
 
 WRITER = Path(__file__).with_name("live_writer.py")
 ENV = dict(os.environ, PYTHONPATH=str(REPO))
-BLOCK = 512
-
-
-def _chain(tmp_path: Path) -> Path:
-    c = tmp_path / "chain.toml"
-    c.write_text(chain_toml(cbf_stage(256, [80.0, 200.0], 19, batch=2), {"type": "integrate",
-                            "snapshots": 2, "mode": "sliding"},
-                            {"type": "btr", "band": [110.0, 130.0]},
-                            {"type": "lofar", "input": "integrate", "beams": [60.0]},
-                            block=BLOCK))
-    return c
 
 
 def _writer(tmp_path: Path, seconds: float, hold: float = 0.0,
@@ -48,33 +39,8 @@ def _writer(tmp_path: Path, seconds: float, hold: float = 0.0,
     return w, rec
 
 
-def _same_products(a: Path, b: Path) -> int:
-    """Every group, dataset (bit for bit, NaNs equal) and attribute of a in b and back;
-    returns the number of datasets compared."""
-    n = 0
-    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        assert dict(fa.attrs) == dict(fb.attrs)
-        names_a, names_b = [], []
-        fa.visit(names_a.append)
-        fb.visit(names_b.append)
-        assert sorted(names_a) == sorted(names_b)
-        for k in names_a:
-            oa, ob = fa[k], fb[k]
-            assert {x: np.asarray(v).tolist() for x, v in oa.attrs.items()} == \
-                {x: np.asarray(v).tolist() for x, v in ob.attrs.items()}, k
-            if isinstance(oa, h5py.Dataset):
-                x, y = oa[()], ob[()]
-                assert x.dtype == y.dtype and x.shape == y.shape, k
-                if x.dtype.kind == "f":
-                    assert np.array_equal(x, y, equal_nan=True), k
-                else:
-                    assert np.array_equal(x, y), k
-                n += 1
-    return n
-
-
 def test_follow_equals_whole_file_run(tmp_path):
-    chain = _chain(tmp_path)
+    chain = follow_chain(tmp_path)
     w, rec = _writer(tmp_path, 12.0)
     stats: list = []
     live = tmp_path / "live.h5"
@@ -84,7 +50,7 @@ def test_follow_equals_whole_file_run(tmp_path):
     n_whole = process(str(rec), str(chain), str(whole))
     with Recording(rec) as r:
         assert n == n_whole == count_blocks(r, BLOCK, BLOCK) == r.n_samples // BLOCK + 1
-    assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
+    assert same_products(live, whole) == 7   # btr and lofar: time, beam, levels
     st = stats[0]
     assert st.reason.startswith("no new samples")
     lat = st.latencies()
@@ -99,7 +65,7 @@ def test_follow_equals_whole_file_run(tmp_path):
 def test_follow_with_a_growing_track(tmp_path, monkeypatch):
     """/nav grows with the samples: the follower re-reads it, every block waits until the
     track reaches the block's end, and the products equal the whole-file run's."""
-    chain = _chain(tmp_path)
+    chain = follow_chain(tmp_path)
     w, rec = _writer(tmp_path, 10.0, nav=True)
     import arrayproc.chain.follow as FO
     ahead = []
@@ -115,7 +81,7 @@ def test_follow_with_a_growing_track(tmp_path, monkeypatch):
     assert w.wait(60) == 0
     whole = tmp_path / "whole.h5"
     process(str(rec), str(chain), str(whole))
-    assert _same_products(live, whole) == 7
+    assert same_products(live, whole) == 7
     nav_end, block_end, growing = (np.array(v) for v in zip(*ahead))
     assert np.all(nav_end[growing] >= block_end[growing] - 1e-9)
     assert np.unique(nav_end).size > 5          # the track was re-read as it grew
@@ -124,7 +90,7 @@ def test_follow_with_a_growing_track(tmp_path, monkeypatch):
 
 
 def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
-    chain = _chain(tmp_path)
+    chain = follow_chain(tmp_path)
     w, rec = _writer(tmp_path, 8.0, hold=6.0)   # the recorder goes quiet but keeps the file
     live = tmp_path / "live.h5"
     f = subprocess.Popen([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
@@ -154,13 +120,13 @@ def test_follow_cli_stops_on_signal_with_a_complete_readable_file(tmp_path):
         assert bool(g.attrs["complete"])
     whole = tmp_path / "whole.h5"
     process(str(rec), str(chain), str(whole))
-    assert _same_products(live, whole) == 7   # btr and lofar: time, beam, levels
+    assert same_products(live, whole) == 7   # btr and lofar: time, beam, levels
 
 
 @pytest.mark.parametrize("args", [["--follow", "--idle", "0"], ["--follow", "--idle", "-1"],
                                   ["--follow", "--idle", "nan"], ["--idle", "5"]])
 def test_follow_refuses_bad_idle(tmp_path, args):
-    chain = _chain(tmp_path)
+    chain = follow_chain(tmp_path)
     rec = tmp_path / "r.h5"
     from tests.conftest import write_recording
     write_recording(rec, np.zeros((2000, 8), np.float32))

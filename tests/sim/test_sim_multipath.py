@@ -9,38 +9,11 @@ import pytest
 from scipy.signal import csd, welch
 
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.realism import C, ranged_scenario, tonal_phasor, two_path
 from arrayproc.sim.multipath import images
 from arrayproc.sim.run import Simulator
 from arrayproc.sim.scenario import MultipathSpec, parse_scenario
 from arrayproc.sim.sources import tonal_amplitude
-
-C = 1500.0
-
-
-def ranged_scenario(ranges, zs, zr, multipath, fs=4096.0, duration=0.5, source=None):
-    """A static source at the origin and one static hydrophone per range (north of it)."""
-    pos = [[float(r), 0.0, 0.0] for r in ranges]
-    src = source or {"tonals": [{"freq": 1000.0, "level_db": 120.0, "phase_deg": 0.0}]}
-    return parse_scenario({
-        "recording": {"fs": fs, "duration": duration, "sound_speed": C, "seed": 3},
-        "array": {"type": "positions", "positions": pos, "depth": zr},
-        "source": [{"name": "s", "start": [0.0, 0.0], "depth": zs, "heading": 0.0, **src}],
-        "propagation": {"multipath": multipath},
-    })
-
-
-def tonal_phasor(x: np.ndarray, f: float, fs: float) -> np.ndarray:
-    """Complex amplitude of a tonal in each column (integer number of cycles)."""
-    t = np.arange(x.shape[0]) / fs
-    return 2 * np.mean(x * np.exp(-2j * np.pi * f * t)[:, None], axis=0)
-
-
-def two_path(r, zs, zr, f, refl):
-    """Lloyd's mirror: A·|e^{-ikR1}/R1 + R·e^{-ikR2}/R2| (complex, exp(+iωt) convention)."""
-    k = 2 * np.pi * f / C
-    r1 = np.hypot(r, zs - zr)
-    r2 = np.hypot(r, zs + zr)
-    return np.exp(-1j * k * r1) / r1 + refl * np.exp(-1j * k * r2) / r2
 
 
 def local_max_mask(level_db, r, frac=0.2, within=10.0):

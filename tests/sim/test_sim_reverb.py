@@ -7,40 +7,10 @@ import numpy as np
 import pytest
 
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.realism import FS, C, sonar_equation_intensity
+from arrayproc.evaluate.scenarios.realism import active_scenario as active
 from arrayproc.sim.run import Simulator
 from arrayproc.sim.scenario import parse_scenario
-
-C = 1500.0
-FS = 4096.0
-
-
-def active(extra: dict, duration: float, seed: int = 1, pulse: float = 0.01,
-           zr: float = 20.0) -> dict:
-    return {
-        "recording": {"fs": FS, "duration": duration, "sound_speed": C, "seed": seed},
-        "array": {"type": "line", "n": 1, "spacing": 1.0, "depth": zr},
-        "ownship": {"start": [0.0, 0.0], "heading": 0.0},
-        "active": {"waveform": "cw", "fc": 1000.0, "duration": pulse, "taper": 0.0,
-                   "level_db": 200.0, "interval": 100.0, "first": 0.1, "count": 1,
-                   "offset": [0.0, 0.0, 0.0], "direct": False, **extra},
-    }
-
-
-def sonar_equation_intensity(t: np.ndarray, sl: float, mu_db: float, depth: float, zr: float,
-                             pulse: float) -> np.ndarray:
-    """Mean-square pressure (Pa²) of monostatic bottom reverberation at time t after the
-    ping's start: 10^{RL/10}·1e-12 with RL = SL − 40 log10 R + 10 log10(μ sin²θ) +
-    10 log10(A), A = 2πr·(cT/2)·(R/r) the ensonified ring (R slant range of the ring's
-    centre, r its horizontal range, sin θ = (D − z)/R)."""
-    big_r = C * (t - 0.5 * pulse) / 2
-    h = depth - zr
-    ok = big_r > h
-    big_r = np.where(ok, big_r, np.nan)
-    r = np.sqrt(big_r**2 - h**2)
-    sin_t = h / big_r
-    area = 2 * np.pi * r * (C * pulse / 2) * (big_r / r)
-    rl = sl - 40 * np.log10(big_r) + mu_db + 20 * np.log10(sin_t) + 10 * np.log10(area)
-    return 1e-12 * 10 ** (rl / 10)
 
 
 def test_reverberation_level_against_the_sonar_equation():

@@ -10,70 +10,26 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from arrayproc.chain import build_chain, run_chain
+from arrayproc.chain import build_chain
 from arrayproc.chain.reader import read_blocks
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.realism import (
+    T_TURN,
+    turn_bearing_errors,
+    turn_chain_text,
+    turn_scenario,
+)
+from arrayproc.evaluate.scenarios.realism import TURN_RATE as RATE
+from arrayproc.evaluate.scenarios.realism import TURN_V as V
 from arrayproc.geo.threading import threaded_positions
-from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
-from arrayproc.io.truth import cone_angles
-
-V = 2.5  # m/s
-RATE = 1.5  # deg/s
-T_TURN = 20.0  # s on the first leg
-NL = 60.0
-
-
-def scenario(duration: float = 100.0) -> str:
-    # source at ~1.2 km, 60 deg to starboard of the first course at the start
-    r, brg = 1200.0, math.radians(90.0 + 60.0)
-    x, y = r * math.sin(brg), r * math.cos(brg)
-    return f"""
-[recording]
-fs = 2048.0
-duration = {duration}
-seed = 5
-nav_interval = 1.0
-
-[array]
-type = "line"
-n = 32
-spacing = 1.5
-depth = 60.0
-shape = "water_pulled"
-
-[ownship]
-start = [0.0, 0.0]
-[[ownship.leg]]
-course = 90.0
-speed = {V}
-duration = {T_TURN}
-[[ownship.leg]]
-course = 200.0
-speed = {V}
-turn_rate = {RATE}
-turn = "starboard"
-duration = {duration + 10.0}
-
-[[source]]
-name = "s"
-start = [{x:.1f}, {y:.1f}]
-depth = 50.0
-heading = 0.0
-[source.broadband]
-band = [150.0, 480.0]
-level_db = {NL + 20 * math.log10(r) - 5.0:.2f}
-
-[noise]
-level_db = {NL}
-"""
 
 
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory) -> Path:
     from arrayproc.sim.run import simulate_file
     d = tmp_path_factory.mktemp("threaded")
-    (d / "s.toml").write_text(scenario())
+    (d / "s.toml").write_text(turn_scenario())
     return simulate_file(d / "s.toml", d / "rec.h5")
 
 
@@ -103,51 +59,9 @@ def test_threaded_positions_follow_the_truth_shape(recording):
     assert not np.allclose(b.positions[:, 1], 0.0, atol=0.5)  # bent in the body frame
 
 
-def chain_text(shape: str) -> str:
-    bearings = ", ".join(f"{b:.1f}" for b in np.arange(0.0, 360.0, 1.0))
-    return f"""
-[input]
-block = 8192
-array_shape = "{shape}"
-
-[[stage]]
-type = "cbf"
-nfft = 4096
-hop = 4096
-window = "hann"
-band = [150.0, 480.0]
-beams = {{ bearings = [{bearings}] }}
-batch = 4
-
-[[stage]]
-type = "integrate"
-snapshots = 2
-mode = "sliding"
-
-[[stage]]
-type = "btr"
-band = [150.0, 480.0]
-"""
-
-
-def bearing_errors(rec_path: Path, shape: str, tmp: Path) -> tuple[np.ndarray, np.ndarray]:
-    """(time, cone-angle error deg) of the BTR's peak beam against the truth."""
-    spec = build_chain(chain_text(shape))
-    prod = tmp / f"p_{shape}.h5"
-    with Recording(rec_path) as rec, ProductsWriter(prod, source=str(rec_path),
-                                                    chain=spec.text) as w:
-        run_chain(rec, spec, w)
-    g = read_products(prod)["btr"]
-    with Recording(rec_path) as rec:
-        cone_true = cone_angles(rec, g["time"])["s"]
-    brg = g["cone_deg"][np.argmax(g["power_db"], axis=1)]
-    cone_est = np.rad2deg(np.arccos(np.cos(np.deg2rad(brg))))  # relative bearing → cone
-    return g["time"], cone_est - cone_true
-
-
 def test_bearings_through_a_turn_rigid_vs_threaded(recording, tmp_path):
-    t, e_rigid = bearing_errors(recording, "rigid", tmp_path)
-    _, e_thr = bearing_errors(recording, "threaded", tmp_path)
+    t, e_rigid = turn_bearing_errors(recording, "rigid", tmp_path)
+    _, e_thr = turn_bearing_errors(recording, "threaded", tmp_path)
     L = 31 * 1.5
     turn = (t > T_TURN + L / V) & (t < 95.0)  # the whole array in the turn
     straight = t < T_TURN - 4.0
@@ -163,4 +77,4 @@ def test_bearings_through_a_turn_rigid_vs_threaded(recording, tmp_path):
 
 def test_array_shape_key_is_checked():
     with pytest.raises(ConfigError, match="array_shape"):
-        build_chain(chain_text("bent"))
+        build_chain(turn_chain_text("bent"))

@@ -22,6 +22,11 @@
   the echo truth.
 - :mod:`.active_tracking` — the multi-target tracker on those contacts, scored against the
   truth.
+- :mod:`.beamformers` — MVDR, MUSIC and port/starboard closed forms and the triplet L-R
+  recording (docs/validation/beamformers.md).
+- :mod:`.realism` — multipath, reverberation and water-pulled-array set-ups with their closed
+  forms (docs/validation/realism.md).
+- :mod:`.follow` — the chain of the followed-recording runs.
 
 The SPL names are importable from here as well.
 """

@@ -30,6 +30,9 @@ mirror track forms), ``side`` is +1 (starboard) or −1 (port); below that rejec
 keeps the ambiguous pair heading ∓ |β| with ``side`` 0. ``cone_deg`` is |β| and
 ``rel_bearing_deg`` is β (both columns optional in the schema, written for these beams only).
 
+Azimuth × elevation beams from ``cbf_azel`` (beam mode ``"azel"``): 2-D peaks with
+``azimuth_deg``, ``elevation_deg`` and ``sigma_deg`` (:mod:`bearings_azel`).
+
 Peaks are refined to sub-beam resolution by a parabola through the peak beam and its two
 neighbours (dB against cone angle). Rows (products ``bearings``, docs/formats.md): ``time``
 (s), ``cone_deg``, ``bearing_port_deg = heading − cone`` and ``bearing_stbd_deg = heading +
@@ -58,6 +61,7 @@ from arrayproc.dsp.windows import time_taper
 from arrayproc.errors import ConfigError
 from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.passive._common import check_power_block, snapshot_times
+from arrayproc.stages.passive.bearings_azel import AZEL_COLUMNS, azel_rows
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
            "freq_lo", "freq_hi", "spl_db")
@@ -125,6 +129,7 @@ class Bearings(Stage):
 
     _lr = False
     _warned = False
+    _warned_azel = False
     _columns = COLUMNS
 
     def _lr_row(self, rows: dict[str, list], rel: float, lev: float, heading: float,
@@ -194,6 +199,9 @@ class Bearings(Stage):
         for b in blocks:
             check_power_block(self, b)
             cone = np.asarray(b.beams, float)
+            if getattr(b.meta, "beam_mode", "cone") == "azel":
+                yield self._azel(b)
+                continue
             if cone.ndim != 1:
                 raise ConfigError(f"stage {self.name!r}: needs cone-angle beams "
                                   "(beams = {start, stop, count}) or relative bearings")
@@ -222,6 +230,30 @@ class Bearings(Stage):
             if out is not None and rows["time"]:
                 out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
             yield b
+
+    def _azel(self, b: Block) -> Block:
+        """Rows of azimuth × elevation beams (``cbf_azel``): 2-D peaks of the band power
+        (:mod:`arrayproc.stages.passive.bearings_azel`); narrowband lines are not picked."""
+        if self.lines and not self._warned_azel:
+            self._warned_azel = True
+            warnings.warn(f"stage {self.name!r}: azimuth x elevation beams carry band power "
+                          "only: key 'lines' is ignored", stacklevel=2)
+        out = self.products("bearings")
+        times = snapshot_times(b)
+        heads = np.asarray(b.meta.headings, float)
+        f_c, width = float(b.freqs[0]), float(b.meta.df)
+        lref = 10 * np.log10(reference_amplitude(recording_units(self.ctx.recording),
+                                                 self.ref)**2)
+        off = received_level_offset_db(b, broadband=True)
+        rows: dict[str, list] = {k: [] for k in COLUMNS + AZEL_COLUMNS}
+        for s in range(b.data.shape[0]):
+            p = b.data[s].sum(axis=0, dtype=np.float64)  # (D,): the one band cell
+            level = 10 * np.log10(np.maximum(p, 1e-300)) - lref
+            azel_rows(self, level, b.beams, times[s], heads[s], f_c - 0.5 * width,
+                      f_c + 0.5 * width, off, rows)
+        if out is not None and rows["time"]:
+            out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
+        return b
 
     def _lines(self, p: np.ndarray, freqs: np.ndarray, t: float, heading: float,
                cone: np.ndarray, df: float, lref: float, rows: dict[str, list],

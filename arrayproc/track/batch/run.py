@@ -22,7 +22,8 @@ Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (e
     side = "auto"              # bearings on a line array: auto or cone (the side may change
                                # from row to row: cone-angle residuals), port | starboard (one
                                # side for the window); delays: auto | port | starboard;
-                               # compact: which bearing column (port | starboard) if they differ
+                               # compact: which bearing column (port | starboard) if they differ;
+                               # a group with azimuth_deg (cbf_azel) is read as azimuths
     mirror_chi2 = 9.0          # bearings: the mirror solution is written too (preferred = 0)
                                # while it costs less than this (χ²) more than the preferred
     cone_gate = [20.0, 160.0]  # bearings/compact: only rows with cone angles in [lo, hi] deg
@@ -221,8 +222,10 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
 
     Bearings (one row per time, the strongest by ``snr_db``): ``time`` (s), ``cone`` and
     ``heading`` (rad; heading = the port/starboard pair's mean, cone = half their
-    difference), ``port``, ``stbd`` (rad). Delays: ``time``, ``tau`` (n, n_ch) s, ``sigma``
-    (n, n_ch) s or None, ``reference``.
+    difference), ``port``, ``stbd`` (rad), and ``azimuth`` (rad) when the group has
+    ``azimuth_deg`` (a volumetric/planar array's rows, which ``compact`` then reads; port and
+    starboard default to it when absent), else None. Delays: ``time``, ``tau`` (n, n_ch) s,
+    ``sigma`` (n, n_ch) s or None, ``reference``.
 
     Parameters
     ----------
@@ -245,13 +248,19 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
         d = delays_columns(g, products_path)
         out.update(time=d["time"], tau=d["tau"], sigma=d["sigma"], reference=d["reference"])
         return out
-    for k in ("time", "bearing_port_deg", "bearing_stbd_deg"):
+    has_az = "azimuth_deg" in g  # a volumetric/planar array's bearings (cbf_azel)
+    for k in ("time",) + (() if has_az else ("bearing_port_deg", "bearing_stbd_deg")):
         if k not in g:
             raise FormatError(f"{products_path}: bearings column {k!r} is missing")
     t = np.asarray(g["time"], float).reshape(-1)
-    port = np.asarray(g["bearing_port_deg"], float).reshape(-1)
-    stbd = np.asarray(g["bearing_stbd_deg"], float).reshape(-1)
+    az = np.asarray(g["azimuth_deg"], float).reshape(-1) if has_az else None
+    port = np.asarray(g["bearing_port_deg"], float).reshape(-1) if "bearing_port_deg" in g \
+        else az
+    stbd = np.asarray(g["bearing_stbd_deg"], float).reshape(-1) if "bearing_stbd_deg" in g \
+        else az
     ok = np.isfinite(t) & np.isfinite(port) & np.isfinite(stbd)
+    if has_az:
+        ok &= np.isfinite(az)
     if cfg["cone_gate"] is not None:
         if "cone_deg" not in g:
             raise FormatError(f"{products_path}: bearings column 'cone_deg' is missing "
@@ -269,7 +278,8 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
         raise FormatError(f"{products_path}: fewer than 5 usable bearing rows in {name!r}")
     p, s = np.deg2rad(port[idx]), np.deg2rad(stbd[idx])
     cone = np.mod(s - p, 2 * np.pi) / 2                     # stbd − port = 2θ
-    out.update(time=t[idx], port=p, stbd=s, cone=cone, heading=p + cone)
+    out.update(time=t[idx], port=p, stbd=s, cone=cone, heading=p + cone,
+               azimuth=np.deg2rad(az[idx]) if has_az else None)
     return out
 
 
@@ -343,7 +353,9 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
     if cfg["method"] == "compact":
         port, stbd = meas["port"][sel], meas["stbd"][sel]
         same = np.allclose(np.angle(np.exp(1j * (port - stbd))), 0.0, atol=1e-9)
-        if same or cfg["side"] == "starboard":
+        if meas.get("azimuth") is not None:  # azimuths of a volumetric array: unambiguous
+            y = meas["azimuth"][sel]
+        elif same or cfg["side"] == "starboard":
             y = stbd
         elif cfg["side"] == "port":
             y = port

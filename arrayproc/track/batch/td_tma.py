@@ -213,7 +213,6 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
                          f"(B, N, 2) with B = {t.size}")
     t0 = float(t[0] if t0 is None else t0)
     t1 = float(t[-1] if t1 is None else t1)
-    tau = t - t0
     sig = np.broadcast_to(np.asarray(1.0 if sigma_s is None else sigma_s, float), y.shape)
     use = np.isfinite(y) & np.isfinite(sig) & (sig > 0)
     use[:, ref] = False
@@ -221,47 +220,88 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
     if n_used < 5:
         raise ValueError(f"time-delay TMA needs at least 5 delays, {n_used} usable")
     w = np.where(use, 1.0 / np.where(use, sig, 1.0), 0.0)
-    yz = np.where(use, y, 0.0)
     o0 = np.array([np.interp(t0, t, elem[:, ref, 0]), np.interp(t0, t, elem[:, ref, 1])])
     o1 = np.array([np.interp(t1, t, elem[:, ref, 0]), np.interp(t1, t, elem[:, ref, 1])])
-
     dzb = None if dz is None else np.broadcast_to(np.asarray(dz, float), y.shape)
-
-    ex = np.ascontiguousarray(elem[..., 0])
-    ey = np.ascontiguousarray(elem[..., 1])
     dz2 = np.zeros(y.shape) if dzb is None else np.ascontiguousarray(dzb**2)
-    last: dict[str, np.ndarray] = {}
-
-    def model(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(h, ∂h/∂x) at x, kept for the Jacobian call that follows the residual call."""
-        if "x" not in last or not np.array_equal(last["x"], x):
-            last["x"] = np.array(x, float)
-            last["h"], last["j"] = td_model_jacobian(last["x"], tau, ex, ey, dz2, ref,
-                                                     sound_speed, bool(retarded))
-        return last["h"], last["j"]
-
-    def res(x: np.ndarray) -> np.ndarray:
-        return (w * (yz - model(x)[0])).ravel()
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        return -(w[..., None] * model(x)[1]).reshape(-1, 4)
 
     if side not in ("auto", "port", "starboard"):
         raise ValueError(f"side must be auto, port or starboard, not {side!r}")
     pw = plane_wave_directions(np.where(use, y, np.nan), elem, ref, sound_speed, heading_rad)
     if array_velocity is not None:
-        vel = np.asarray(array_velocity, float).reshape(t.size, 2)
-        if "cone" in pw:
-            v_ax = axial_speed(vel, np.nan_to_num(pw["heading"]))
-            pw["cone"] = static_cone(pw["cone"], v_ax, sound_speed)
-            v_u = v_ax * np.cos(pw["cone"])
-        else:
-            v_u = vel[:, 0] * np.sin(pw["bearing"]) + vel[:, 1] * np.cos(pw["bearing"])
-        y = static_delays(y, np.nan_to_num(v_u), sound_speed)
-        yz = np.where(use, y, 0.0)
+        y = _motion_corrected(y, pw, array_velocity, sound_speed)
+    fit = _DelayResiduals(t - t0, elem, dz2, ref, sound_speed, retarded, w,
+                          np.where(use, y, 0.0))
+    ends, margin = _search_ends(t, pw, (t0, t1), side)
+    search = PolarSearch(ends[0], ends[1], margin, min_range_m, max_range_m, t1 - t0, o0, o1)
+    wm = w * fit.yz
+    wc = w / sound_speed
+    inv_c = 1.0 / sound_speed if retarded else 0.0
+    x = global_then_local(
+        lambda p: td_cost_population(p, fit.tau, fit.ex, fit.ey, dz2, wm, wc, ref, inv_c),
+        fit.res, fit.jac, search.bounds, search.to_state, seed, popsize=popsize,
+        maxiter=maxiter)
+    x, r, wj, rho = _correlated_refit(fit, x, use, correlation)
+    if sigma_s is None:  # one σ for all delays, from the residuals
+        s = float(np.sqrt(np.sum(r**2) / max(n_used - 4, 1)))
+        r, wj = r / s, wj / s
+    # eq. (3.53): the whitened Jacobian's Gram matrix, Σ_b G_bᵀ C_b⁻¹ G_b
+    fim = wj.T @ wj
+    sol = finish_solution("delays", t0, t1, x, r, wj, fim, o0, fit.model(x)[0].copy(),
+                          n_used=n_used)
+    sol.correlation = rho
+    return sol
+
+
+class _DelayResiduals:
+    """Weighted residuals w (y − h(x)) of eq. (3.50) and their Jacobian, with the model
+    (h, ∂h/∂x) at the last x kept for the Jacobian call that follows the residual call."""
+
+    def __init__(self, tau: np.ndarray, elem: np.ndarray, dz2: np.ndarray, ref: int,
+                 sound_speed: float, retarded: bool, w: np.ndarray, yz: np.ndarray) -> None:
+        self.tau, self.dz2, self.ref, self.c = tau, dz2, ref, sound_speed
+        self.ex = np.ascontiguousarray(elem[..., 0])
+        self.ey = np.ascontiguousarray(elem[..., 1])
+        self.retarded, self.w, self.yz = bool(retarded), w, yz
+        self.last: dict[str, np.ndarray] = {}
+
+    def model(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(h, ∂h/∂x) at x."""
+        last = self.last
+        if "x" not in last or not np.array_equal(last["x"], x):
+            last["x"] = np.array(x, float)
+            last["h"], last["j"] = td_model_jacobian(last["x"], self.tau, self.ex, self.ey,
+                                                     self.dz2, self.ref, self.c, self.retarded)
+        return last["h"], last["j"]
+
+    def res(self, x: np.ndarray) -> np.ndarray:
+        return (self.w * (self.yz - self.model(x)[0])).ravel()
+
+    def jac(self, x: np.ndarray) -> np.ndarray:
+        return -(self.w[..., None] * self.model(x)[1]).reshape(-1, 4)
+
+
+def _motion_corrected(y: np.ndarray, pw: dict, array_velocity: np.ndarray,
+                      sound_speed: float) -> np.ndarray:
+    """Delays corrected for the array's motion during the wavefront's passage (eqs. (M2),
+    (M4) of :mod:`.motion`); a line array's cones in ``pw`` are made static in place."""
+    vel = np.asarray(array_velocity, float).reshape(y.shape[0], 2)
+    if "cone" in pw:
+        v_ax = axial_speed(vel, np.nan_to_num(pw["heading"]))
+        pw["cone"] = static_cone(pw["cone"], v_ax, sound_speed)
+        v_u = v_ax * np.cos(pw["cone"])
+    else:
+        v_u = vel[:, 0] * np.sin(pw["bearing"]) + vel[:, 1] * np.cos(pw["bearing"])
+    return static_delays(y, np.nan_to_num(v_u), sound_speed)
+
+
+def _search_ends(t: np.ndarray, pw: dict, window: tuple[float, float],
+                 side: str) -> tuple[list[np.ndarray], float]:
+    """Candidate bearings (rad) at the window's two ends from the plane-wave directions (both
+    mirror sides of a line array unless ``side`` names one) and the search margin (rad)."""
     ends = []
     margin = np.deg2rad(2.0)
-    for at in (t0, t1):
+    for at in window:
         if "bearing" in pw:
             v, sc = end_value(t, pw["bearing"], at)
             ends.append(np.array([v]))
@@ -271,38 +311,30 @@ def solve_delays(times: np.ndarray, delays_s: np.ndarray, elements_xy: np.ndarra
             cands = {"port": h - v, "starboard": h + v}
             ends.append(np.array([cands[side]] if side != "auto" else list(cands.values())))
         margin = max(margin, 10 * sc)
-    search = PolarSearch(ends[0], ends[1], margin, min_range_m, max_range_m, t1 - t0, o0, o1)
-    wm = w * yz
-    wc = w / sound_speed
-    inv_c = 1.0 / sound_speed if retarded else 0.0
-    x = global_then_local(
-        lambda p: td_cost_population(p, tau, ex, ey, dz2, wm, wc, ref, inv_c), res, jac,
-        search.bounds, search.to_state, seed, popsize=popsize, maxiter=maxiter)
+    return ends, margin
+
+
+def _correlated_refit(fit: _DelayResiduals, x: np.ndarray, use: np.ndarray,
+                      correlation: float | None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The within-snapshot correlation ρ (given, or estimated from the residuals at x) and,
+    for ρ > 0, the refit on the whitened residuals (eq. (D1)); (x, residuals, Jacobian, ρ)."""
     rho = 0.0 if correlation is None else float(correlation)
     if not 0.0 <= rho < 1.0:
         raise ValueError(f"correlation must be in [0, 1), not {rho}")
+    shape = use.shape
     if correlation is None:
-        rho = estimate_correlation(res(x).reshape(y.shape), use)
-    if rho > 0.0:
-        white = SnapshotWhitening(use, rho)
-        x = least_squares(lambda q: white(res(q).reshape(y.shape)).ravel(), x,
-                          jac=lambda q: white(jac(q).reshape(y.shape + (4,))).reshape(-1, 4),
-                          method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
-                          max_nfev=200).x
-        r = white(res(x).reshape(y.shape)).ravel()
-        wj = white(jac(x).reshape(y.shape + (4,))).reshape(-1, 4)
-    else:
-        r = res(x)
-        wj = jac(x)
-    if sigma_s is None:  # one σ for all delays, from the residuals
-        s = float(np.sqrt(np.sum(r**2) / max(n_used - 4, 1)))
-        r, wj = r / s, wj / s
-    # eq. (3.53): the whitened Jacobian's Gram matrix, Σ_b G_bᵀ C_b⁻¹ G_b
-    fim = wj.T @ wj
-    sol = finish_solution("delays", t0, t1, x, r, wj, fim, o0, model(x)[0].copy(),
-                          n_used=n_used)
-    sol.correlation = rho
-    return sol
+        rho = estimate_correlation(fit.res(x).reshape(shape), use)
+    if rho <= 0.0:
+        return x, fit.res(x), fit.jac(x), rho
+    white = SnapshotWhitening(use, rho)
+    x = least_squares(lambda q: white(fit.res(q).reshape(shape)).ravel(), x,
+                      jac=lambda q: white(fit.jac(q).reshape(shape + (4,))).reshape(-1, 4),
+                      method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                      max_nfev=200).x
+    r = white(fit.res(x).reshape(shape)).ravel()
+    wj = white(fit.jac(x).reshape(shape + (4,))).reshape(-1, 4)
+    return x, r, wj, rho
 
 
 def estimate_correlation(resid: np.ndarray, use: np.ndarray) -> float:

@@ -8,10 +8,10 @@ import numpy as np
 
 from arrayproc.chain import build_chain, run_chain
 from arrayproc.chain.follow import follow_chain
+from arrayproc.evaluate.compare import same_products
 from arrayproc.io import products as P
 from arrayproc.io.products import ProductsWriter
 from arrayproc.io.recording import Recording
-from tests.chain.test_follow import _same_products
 from tests.stages.active.test_chain_active import CHAIN, recordings  # noqa: F401
 
 
@@ -57,7 +57,7 @@ def test_active_chain_follows_a_growing_recording(recordings, tmp_path, monkeypa
         st = follow_chain(g, spec, w, idle_s=0.2, poll_s=0.0)
         n_total = rec.n_samples
     assert st.reason.startswith("no new samples")
-    assert _same_products(whole, live) >= 10
+    assert same_products(whole, live) >= 10
     # the first ping's contacts were written while the recording was still growing
     first = [v for name, v in seen if name.endswith("cfar")]
     assert first and first[0] < n_total

@@ -9,23 +9,13 @@ import pytest
 
 from arrayproc.chain.domains import Domain
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.beamformers import rejection_closed_form, source_spectra
 from arrayproc.io.geometry import line_array, triplet_array, twin_line_array
+from arrayproc.sim.snapshot_spectra import C, blocks
 from arrayproc.stages.beamform.cbf import element_delays
 from arrayproc.stages.beamform.lr_cbf import LRCBF, lr_weights, mirror_correlation, null_depth
-from tests.stages.beamform.adaptive_synth import C, blocks
 
 BEAMS = {"start": -179.0, "stop": 180.0, "count": 360}
-
-
-def source_spectra(pos, freqs, rel_deg, snr, k, rng):
-    """(K, F, C): a complex Gaussian plane wave from relative bearing ``rel_deg`` (horizontal)
-    at per-element SNR ``snr`` (linear) in unit white noise."""
-    d = np.array([[np.cos(np.deg2rad(rel_deg)), np.sin(np.deg2rad(rel_deg)), 0.0]])
-    a = np.exp(2j * np.pi * freqs[:, None] * element_delays(pos, d, "3d", C)[0][None])
-    c = pos.shape[0]
-    x = (rng.standard_normal((k, freqs.size, c)) + 1j * rng.standard_normal((k, freqs.size, c)))
-    s = (rng.standard_normal((k, freqs.size)) + 1j * rng.standard_normal((k, freqs.size)))
-    return (x + np.sqrt(snr) * s[..., None] * a[None]) / np.sqrt(2)
 
 
 @pytest.mark.parametrize("geometry", ["twin", "triplet"])
@@ -42,16 +32,6 @@ def test_mirror_correlation_closed_form(geometry):
         pos, want = triplet_array(8, 0.75, 0.12), (1 + 2 * np.cos(np.sqrt(3) * k * 0.12 * s)) / 3
     got = mirror_correlation(pos, rel, freqs, C)
     assert np.max(np.abs(got - want)) < 1e-12
-
-
-def rejection_closed_form(n, q, snr, gamma):
-    """Look over mirror beam power of a source at per-element SNR ``snr`` in unit white noise
-    for the weights (a − γρ a_m)/(1 − γ|ρ|²) (scaled by N): look N² s + ‖w‖², mirror
-    N² |ρ|² (1 − γ)²/(1 − γ|ρ|²)² s + ‖w‖², ‖w‖² = N (1 − 2γ|ρ|² + γ²|ρ|²)/(1 − γ|ρ|²)².
-    γ = 0 is delay-and-sum, (N s + 1)/(N |ρ|² s + 1); γ = 1 the full null, 1 + N(1 − |ρ|²) s."""
-    norm = n * (1 - 2 * gamma * q + gamma**2 * q) / (1 - gamma * q) ** 2
-    mirror = n * n * q * (1 - gamma) ** 2 / (1 - gamma * q) ** 2 * snr
-    return 10 * np.log10((n * n * snr + norm) / (mirror + norm))
 
 
 @pytest.mark.parametrize("geometry", ["twin", "triplet"])

@@ -8,45 +8,18 @@ from __future__ import annotations
 import numpy as np
 
 from arrayproc.chain import build_chain, run_chain
+from arrayproc.evaluate.chains import chain_toml
+from arrayproc.evaluate.scenarios.beamformers import LR_TRIPLET_SCENARIO
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
 from arrayproc.io.truth import relative_bearings
 from arrayproc.plots.btr import plot_btr
 from arrayproc.sim.run import simulate_file
-from tests.conftest import chain_toml
-
-SCENARIO = """
-[recording]
-fs = 4096.0
-duration = 8.0
-seed = 3
-[array]
-type = "triplet"
-n = 16
-spacing = 0.75
-radius = 0.1
-depth = 60.0
-[ownship]
-heading = 30.0
-[propagation]
-loss = "spherical"
-[noise]
-level_db = 60.0
-[[source]]
-name = "target"
-start = [2000.0, 0.0]
-depth = 60.0
-course = 0.0
-speed_kn = 0.0
-[source.broadband]
-band = [500.0, 1500.0]
-level_db = 126.0
-"""
 
 
 def test_triplet_source_resolved_to_its_side(tmp_path):
     scen = tmp_path / "s.toml"
-    scen.write_text(SCENARIO)
+    scen.write_text(LR_TRIPLET_SCENARIO)
     rec_path = tmp_path / "r.h5"
     simulate_file(scen, rec_path)
     spec = build_chain(chain_toml(

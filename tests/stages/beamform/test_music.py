@@ -7,57 +7,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from arrayproc.chain.stage import RunContext
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.beamformers import (
+    local_peaks,
+    resolved,
+    rmse_ratio,
+    root_trials,
+)
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.snapshot_spectra import C, blocks, spectra
 from arrayproc.stages.beamform._subspace import source_count
 from arrayproc.stages.beamform.music import MUSIC
-from tests.stages.beamform.adaptive_synth import C, Products, blocks, local_peaks, spectra, steer
-from tests.stages.beamform.test_mvdr import resolved
 
 N, DX = 32, 0.75
-
-
-def stochastic_crb(pos, f, cones, snr_db, snapshots):
-    """Stochastic (unconditional) CRB of the cone angles, rad² (Stoica & Nehorai 1990):
-    σ²/(2K) {Re[(D^H Π⊥ D) ⊙ (P A^H R⁻¹ A P)ᵀ]}⁻¹, uncorrelated sources of power P = SNR·σ²,
-    σ² = 1."""
-    fr = np.array([f])
-    a = np.stack([steer(pos, c, fr)[0] for c in cones], 1)  # (C, M)
-    x = pos[:, 0] - pos[:, 0].mean()
-    d = np.stack([a[:, i] * (-2j * np.pi * f * x * np.sin(np.deg2rad(c)) / C)
-                  for i, c in enumerate(cones)], 1)
-    p = 10 ** (snr_db / 10) * np.eye(len(cones))
-    r = a @ p @ a.conj().T + np.eye(pos.shape[0])
-    proj = np.eye(pos.shape[0]) - a @ np.linalg.solve(a.conj().T @ a, a.conj().T)
-    h = (d.conj().T @ proj @ d) * (p @ a.conj().T @ np.linalg.solve(r, a) @ p).T
-    return np.diag(np.linalg.inv(h.real)) / (2 * snapshots)
-
-
-def root_trials(pos, f, cones, snr_db, snapshots, trials, seed, **kw):
-    """Root-MUSIC cone angles (trials, M) of independent trials (one covariance group each)."""
-    rng = np.random.default_rng(seed)
-    fr = np.array([f])
-    x = spectra(pos, fr, cones, snr_db, trials * snapshots, rng)
-    st = MUSIC(beams={"start": 0.0, "stop": 180.0, "count": 19}, snapshots=snapshots,
-               sources=len(cones), root=True, **kw)
-    st.ctx = RunContext(products=Products())
-    for _ in st.process(blocks(x, fr, pos, per_block=snapshots)):
-        pass
-    g = st.ctx.products.groups["music"]
-    t, cone = g.column("time"), g.column("cone_deg")
-    out = np.full((trials, len(cones)), np.nan)
-    for i, tt in enumerate(np.unique(t)):
-        out[i, :] = np.sort(cone[t == tt])[: len(cones)]
-    return out
-
-
-def rmse_ratio(pos, f, cones, snr_db, snapshots, trials, seed):
-    est = root_trials(pos, f, cones, snr_db, snapshots, trials, seed)
-    err = np.deg2rad(est - np.sort(cones)[None])
-    rmse = np.sqrt(np.nanmean(err**2, axis=0))
-    crb = np.sqrt(stochastic_crb(pos, f, sorted(cones), snr_db, snapshots))
-    return rmse / crb
 
 
 def test_rmse_near_stochastic_crb_one_source():

@@ -9,11 +9,12 @@ import pytest
 from scipy.optimize import brentq
 
 from arrayproc.errors import ConfigError
+from arrayproc.evaluate.scenarios.beamformers import closed_form, exact_cov, resolved
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.snapshot_spectra import C, blocks, spectra, steer
 from arrayproc.stages.beamform import _adaptive_kernels as ka
 from arrayproc.stages.beamform._steering import Steering, form_reference
 from arrayproc.stages.beamform.mvdr import MVDR
-from tests.stages.beamform.adaptive_synth import C, blocks, local_peaks, spectra, steer
 
 N, DX = 32, 0.75
 
@@ -45,26 +46,6 @@ def test_form_matches_numpy(geometry, rng):
     got = st.form(q)
     want = form_reference(q, st.matrix(slice(None)))
     assert np.max(np.abs(got - want)) < 1e-9 * np.abs(q).max() * pos.shape[0]
-
-
-def exact_cov(pos, f, cone_i, inr, sigma2=1.0):
-    """R = σ² I + σ_i² v v^H of one interferer at ``cone_i`` and its steering vector."""
-    v = steer(pos, cone_i, np.array([f]))[0]
-    s2 = sigma2 * 10 ** (inr / 10)
-    return sigma2 * np.eye(pos.shape[0]) + s2 * np.outer(v, v.conj()), v, s2
-
-
-def closed_form(a, v, s2, sigma2, delta):
-    """Sherman-Morrison for R + δI = (σ²+δ) I + s² v v^H: the Capon estimate 1/a^H R_δ⁻¹ a,
-    the white-noise gain of w = R_δ⁻¹ a / a^H R_δ⁻¹ a and its output power w^H R w."""
-    n = a.size
-    rho = np.vdot(v, a)
-    beta = s2 / (sigma2 + delta + n * s2)
-    ainv_a = (n - beta * abs(rho) ** 2) / (sigma2 + delta)
-    wn = (a - beta * v * rho) / (sigma2 + delta) / ainv_a  # weights
-    wng = abs(np.vdot(wn, a)) ** 2 / np.vdot(wn, wn).real
-    out = sigma2 * np.vdot(wn, wn).real + s2 * abs(np.vdot(wn, v)) ** 2
-    return 1.0 / ainv_a, wng, out
 
 
 def stage_on(pos, freqs, cones, **kw):
@@ -162,11 +143,6 @@ def resolution_trial(rng, snr_db=10.0, groups=10, snapshots=64, **kw):
         r = np.einsum("kfc,kfd->fcd", xs, xs.conj()) / snapshots
         cbf.append(st.steering.form(r).sum(0))
     return truth, st.beam_axis, [o.data[0, 0] for o in out], cbf
-
-
-def resolved(p, axis, truth, tol=0.3):
-    pk = sorted(local_peaks(p, axis, 2))
-    return len(pk) == 2 and all(abs(a - b) <= tol for a, b in zip(pk, truth, strict=True))
 
 
 def test_resolves_half_a_beamwidth_where_cbf_does_not(rng):

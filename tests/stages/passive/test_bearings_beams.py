@@ -9,10 +9,11 @@ import pytest
 
 from arrayproc.chain.stage import RunContext
 from arrayproc.dsp.peaks import half_power_width, pick_peaks
+from arrayproc.evaluate.scenarios.beamformers import Products
 from arrayproc.io.geometry import line_array
+from arrayproc.sim.snapshot_spectra import C, blocks, spectra
 from arrayproc.stages.beamform.mvdr import MVDR
 from arrayproc.stages.passive.bearings import Bearings
-from tests.stages.beamform.adaptive_synth import C, Products, blocks, spectra
 
 
 def test_half_power_width_of_a_gaussian():

@@ -194,3 +194,52 @@ def test_unresolved_side_writes_both_mirror_solutions(tmp_path):
     np.testing.assert_array_equal(g["preferred"], [1, 0])
     assert {sols[0].side, sols[1].side} == {"port", "starboard"}
     assert abs(g["cost_mirror"][0] - g["cost"][1]) < 1e-9 * max(1.0, g["cost"][1])
+
+
+def test_compact_reads_the_azimuths_of_a_volumetric_array(tmp_path):
+    """A bearings group with ``azimuth_deg`` (cbf_azel rows) is read as azimuths by
+    ``method = "compact"``: port/starboard columns that differ (which would need tma.side)
+    are not used, and the solution is the one of the azimuths given to the solver."""
+    from arrayproc.sim.scenario import tetrahedron
+    from arrayproc.track.batch.compact import solve_compact
+
+    t = np.arange(0.0, 601.0, 10.0)
+    truth = np.array([1500.0, 800.0, -7.3 * 0.6, -7.3 * 0.8])
+    pos_src = truth[:2] + truth[2:] * t[:, None]
+    rec = tmp_path / "tet.h5"
+    with RecordingWriter(rec, 100.0, 4, positions=tetrahedron(1.84)) as w:
+        w.append(np.zeros((10, 4), np.float32))
+        w.set_nav(t, np.zeros((t.size, 2)), np.full(t.size, 30.0))
+    rng = np.random.default_rng(3)
+    az = np.rad2deg(np.arctan2(pos_src[:, 0], pos_src[:, 1])) + rng.normal(0, 0.5, t.size)
+    prod = tmp_path / "azel.h5"
+    n = t.size
+    with ProductsWriter(prod, source=str(rec)) as w:
+        g = w.group("bearings", "bearings")
+        g.append(time=t, cone_deg=np.full(n, 90.0), bearing_port_deg=(az - 40) % 360,
+                 bearing_stbd_deg=(az + 40) % 360, azimuth_deg=az % 360,
+                 elevation_deg=np.zeros(n), sigma_deg=np.full(n, 0.5),
+                 level_db=np.full(n, 90.0), snr_db=np.full(n, 20.0),
+                 freq_lo=np.full(n, 100.0), freq_hi=np.full(n, 400.0),
+                 spl_db=np.full(n, 90.0))
+    cfg = _cfg(tmp_path, 'method = "compact"\nspeed_mps = 7.3\nsigma_bearing_deg = 0.5\n'
+               "max_range_m = 5000.0\n")
+    sol = run_tma(str(prod), cfg, str(tmp_path / "c.h5"))[0]
+    with Recording(rec) as r:
+        obs = np.stack([p.elements[:, :2].mean(0) for p in r.poses(t)]).mean(0)
+    ref = solve_compact(t, np.deg2rad(az % 360), obs, np.deg2rad(0.5), speed_mps=7.3,
+                        sigma_speed_mps=0.0, correlation_s=0.0, t0=0.0, t1=600.0,
+                        max_range_m=5000.0, n_grid=200, n_headings=72)
+    np.testing.assert_array_equal(sol.state, ref.state)  # the same solver on the same data
+    sig = np.sqrt(np.diag(sol.crlb))
+    assert np.all(np.abs(sol.state[:2] - truth[:2]) < 3 * sig[:2]), (sol.state - truth, sig)
+    # without azimuth_deg, the differing port/starboard pair needs tma.side
+    prod2 = tmp_path / "line.h5"
+    with ProductsWriter(prod2, source=str(rec)) as w:
+        w.group("bearings", "bearings").append(
+            time=t, cone_deg=np.full(n, 40.0), bearing_port_deg=(az - 40) % 360,
+            bearing_stbd_deg=(az + 40) % 360, level_db=np.full(n, 90.0),
+            snr_db=np.full(n, 20.0), freq_lo=np.full(n, 100.0), freq_hi=np.full(n, 400.0),
+            spl_db=np.full(n, 90.0))
+    with pytest.raises(ConfigError, match="tma.side"):
+        run_tma(str(prod2), cfg, str(tmp_path / "c2.h5"))

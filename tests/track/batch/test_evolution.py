@@ -64,11 +64,15 @@ def test_td_solution_agrees_with_scipy_differential_evolution():
     y = delay_model(x, tr.time, el, 0, 1500.0) + rng.normal(0, 1e-4, (tr.time.size, 32))
     ours = solve_delays(tr.time, y, el, 1e-4, heading_rad=tr.heading, seed=3)
 
+    import inspect
+
     import arrayproc.track.batch.result as R
+    # scipy >= 1.15 takes the seed as ``rng`` (a Generator); older releases as ``seed``
+    key = "rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed"
 
     def scipy_evolve(cost, bounds, seed, popsize, maxiter, tol, mutation, recombination):
         de = differential_evolution(cost, bounds, vectorized=True, updating="deferred",
-                                    rng=seed, popsize=popsize, maxiter=maxiter, tol=tol,
+                                    **{key: seed}, popsize=popsize, maxiter=maxiter, tol=tol,
                                     atol=0.0, polish=False, init="sobol", mutation=mutation,
                                     recombination=recombination)
         return de

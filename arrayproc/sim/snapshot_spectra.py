@@ -1,17 +1,25 @@
-"""Snapshot-model test data for the adaptive and subspace beamformers: element spectra of
-independent (or coherent) complex Gaussian plane waves plus white noise,
+"""Snapshot-model spectra for the adaptive and subspace beamformers, in closed form.
+
+Element spectra of independent (or coherent) complex Gaussian plane waves plus white noise,
 x_k(f) = Σ_i s_ik(f) a(θ_i, f) + n_k(f), with a_n = exp(+j2πf x_n cos θ/c) the steering vector
-of ``cbf``, as ``("snapshot", "freq", "channel")`` blocks the stages read directly."""
+of ``cbf`` (body x only, centroid reference), and the ``("snapshot", "freq", "channel")``
+spectra blocks the stages read directly (Hann snapshots of ``NFFT`` samples every ``HOP`` at
+``FS``). The time-domain far-field signals are :mod:`arrayproc.sim.plane_wave`.
+"""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
 
 import numpy as np
 
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain, SnapshotMeta
 
-C = 1500.0
-NFFT, HOP, FS = 1024, 512, 5120.0
+__all__ = ["C", "NFFT", "HOP", "FS", "steer", "spectra", "blocks"]
+
+C = 1500.0  # sound speed, m/s
+NFFT, HOP, FS = 1024, 512, 5120.0  # snapshot grid of the blocks: samples, samples, Hz
 
 
 def steer(pos: np.ndarray, cone_deg: float, f: np.ndarray) -> np.ndarray:
@@ -41,7 +49,7 @@ def spectra(pos: np.ndarray, freqs: np.ndarray, cones: list[float], snr_db: floa
 
 
 def blocks(x: np.ndarray, freqs: np.ndarray, pos: np.ndarray, per_block: int = 64,
-           first: int = 0):
+           first: int = 0) -> Iterator[Block]:
     """Spectra blocks of ``x`` (S, F, C) on the snapshot grid from snapshot ``first``."""
     for i in range(0, x.shape[0], per_block):
         part = x[i:i + per_block]
@@ -53,45 +61,3 @@ def blocks(x: np.ndarray, freqs: np.ndarray, pos: np.ndarray, per_block: int = 6
         yield Block(part.astype(np.complex64), Domain.SPECTRA, starts[0] / FS,
                     (starts[-1] - starts[0] + NFFT) / FS, FS, pos, None, freqs, None, int(k[0]),
                     meta)
-
-
-class Rows:
-    """A stand-in products group that keeps appended rows (for stages that write products)."""
-
-    def __init__(self) -> None:
-        self.rows: dict[str, list] = {}
-        self.attrs: dict = {}
-
-    def append(self, **cols) -> None:
-        for k, v in cols.items():
-            self.rows.setdefault(k, []).append(np.asarray(v))
-
-    def set(self, name, data, **attrs) -> None:
-        self.rows[name] = [np.asarray(data)]
-
-    def column(self, name: str) -> np.ndarray:
-        return np.concatenate(self.rows.get(name, [np.zeros(0)]))
-
-
-class Products:
-    """A stand-in products writer handing out :class:`Rows` groups."""
-
-    def __init__(self) -> None:
-        self.groups: dict[str, Rows] = {}
-
-    def group(self, name, kind, stage=None, **attrs) -> Rows:
-        return self.groups.setdefault(name, Rows())
-
-
-def local_peaks(p: np.ndarray, axis: np.ndarray, n: int = 2) -> list[float]:
-    """The ``n`` strongest local maxima of ``p`` (B,), parabolically refined (dB), in deg."""
-    y = 10 * np.log10(np.maximum(p, 1e-300))
-    i = np.flatnonzero((y[1:-1] > y[:-2]) & (y[1:-1] >= y[2:])) + 1
-    i = i[np.argsort(-y[i])][:n]
-    out = []
-    for k in i:
-        a, b, c = y[k - 1], y[k], y[k + 1]
-        den = a - 2 * b + c
-        off = 0.5 * (a - c) / den if den < 0 else 0.0
-        out.append(float(axis[k] + off * (axis[1] - axis[0])))
-    return out
