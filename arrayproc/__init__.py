@@ -45,6 +45,7 @@ _API = {
     # stages: one class per chain type (arrayproc.stages.TYPES; a test keeps them equal)
     "DFTFilter": "arrayproc.stages.condition.dft_filter",
     "CBF": "arrayproc.stages.beamform.cbf",
+    "CBFAzEl": "arrayproc.stages.beamform.cbf_azel",
     "IBF": "arrayproc.stages.beamform.ibf",
     "PSAS": "arrayproc.stages.beamform.etam",
     "ETAM": "arrayproc.stages.beamform.etam",
