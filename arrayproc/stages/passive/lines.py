@@ -12,7 +12,10 @@ on the best beam per bin, ``R(f) = max_b r(b, f)``:
   apart stay two lines, one tonal over several bins stays one;
 - at most ``max_lines`` lines per snapshot, strongest first.
 
-Each line gives one contact at its strongest cell (beam b*, bin f*):
+Each line gives one contact at its peak bin f* (the bin of the run with the highest R) and
+beam b*, the most powerful of the beams over the threshold at f* (the level, not the ratio,
+points at the source: a broadband source raises its own beams' background, so the ratio
+peaks off it, on a sidelobe):
 
 - ``cone_deg``: vertex of the parabola through the beam row's dB levels at f* (b* and its two
   neighbours); ``bearing_port_deg = heading − cone``, ``bearing_stbd_deg = heading + cone``
@@ -21,7 +24,7 @@ Each line gives one contact at its strongest cell (beam b*, bin f*):
   neighbouring bins (Gaussian interpolation: exact for a Gaussian main lobe);
 - ``bandwidth_hz``: the half-power width of that spectrum around f*
   (:func:`arrayproc.dsp.peaks.half_power_width`), ≈ 1.44 bins for an unsmeared Hann tone;
-- ``snr_db``: r(b*, f*), the peak over the TPSW background (10·log10((S + N)/N));
+- ``snr_db``: r(b*, f*), the line over the TPSW background (10·log10((S + N)/N));
 - ``level_db``: the tone's received level at a hydrophone, dB re ``ref``² (1 µPa² for data
   in Pa, full scale for FS): the background-subtracted beam power summed over the line's bins
   and the window's main lobe (±``lobe_bins`` around f*; Parseval makes the sum independent of
@@ -148,8 +151,8 @@ class Lines(Stage):
         runs = sorted(runs, key=lambda r: -r_db[:, r[2]].max())[: self.max_lines]
         n_b, n_f = spec.shape
         for lo, hi, fi in sorted(runs, key=lambda r: r[2]):
-            bi = int(np.argmax(r_db[:, fi]))
             row = 10 * np.log10(np.maximum(spec[:, fi], 1e-300))
+            bi = int(np.argmax(np.where(r_db[:, fi] >= self.threshold_db, row, -np.inf)))
             c, gain = float(cone[bi]), 0.0
             if 0 < bi < n_b - 1:
                 c, top = parabolic_vertex(cone[bi - 1:bi + 2], row[bi - 1:bi + 2])
