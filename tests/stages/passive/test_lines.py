@@ -68,7 +68,8 @@ def test_line_runs_split_and_merge():
     y[[4, 5, 6]] = [14, 20, 15]          # one line over three bins
     y[[10, 11, 12, 13, 14]] = [13, 20, 15, 19, 13]  # two lines: valley > 3 dB below both
     y[[20, 21, 22]] = [15, 13.5, 15.5]   # shallow valley: one line
-    assert [tuple(map(int, r)) for r in line_runs(y, 12.0)] == [(4, 6, 5), (10, 12, 11), (13, 14, 13), (20, 22, 22)]
+    runs = [tuple(map(int, r)) for r in line_runs(y, 12.0)]
+    assert runs == [(4, 6, 5), (10, 12, 11), (13, 14, 13), (20, 22, 22)]
     assert line_runs(np.zeros(8), 1.0) == []
 
 

@@ -99,3 +99,7 @@ def test_a_line_contact_at_each_tonal(tmp_path: Path):
                 assert abs(lines["cone_deg"][m][0] - cones[name][i]) < 3.0
     # nothing else: one contact per (time, line), four lines
     assert lines["time"].size == 4 * times.size
+    from arrayproc.plots import plot_file
+    png = tmp_path / "lines.png"
+    plot_file(str(prod), str(png), "lines")  # with the truth overlay of the recording
+    assert png.stat().st_size > 10_000
