@@ -74,7 +74,7 @@ def test_line_runs_split_and_merge():
 
 
 def test_frequency_cone_level_against_truth_and_crlb(tmp_path, rng):
-    f0, cone, a, sigma = 301.3, 63.0, 0.15, 1.0  # 0.325 bin off a bin centre
+    f0, cone, a, sigma = 301.3, 63.4, 0.15, 1.0  # 0.325 bin, 0.4 beam off the grids
     x, pos = tonal(NFFT * N_B * 40, [cone], [f0], [a], sigma, rng)
     rows = run_lines(x, pos, tmp_path, heading=20.0, threshold_db=12.0)
     n_t = np.unique(rows["time"]).size
@@ -91,7 +91,10 @@ def test_frequency_cone_level_against_truth_and_crlb(tmp_path, rng):
     assert np.sqrt(np.mean((rows["cone_deg"] - cone) ** 2)) < 0.1 * beamwidth_deg(f0, cone)
     assert np.allclose(rows["bearing_port_deg"], (20.0 - rows["cone_deg"]) % 360)
     assert np.allclose(rows["bearing_stbd_deg"], (20.0 + rows["cone_deg"]) % 360)
-    assert np.all(np.abs(rows["beam"] - cone) <= 1)  # beams 1 deg apart from 0
+    # beams 1 deg apart from 0: the vertex lies within one beam of the peak beam, and the peak
+    # beam within a quarter beamwidth of the truth (noise moves the peak of a 12 deg beam)
+    assert np.all(np.abs(rows["beam"] - rows["cone_deg"]) <= 1)
+    assert np.all(np.abs(rows["beam"] - cone) < 0.25 * beamwidth_deg(f0, cone))
     # received level of the tone A²/2 at a hydrophone, dB re 1 µPa²
     assert abs(np.median(rows["level_db"]) - 10 * np.log10(a**2 / 2 / 1e-12)) < 0.5
     # half-power width of a Hann main lobe: 1.44 bins (a little more between bins)
