@@ -163,6 +163,9 @@ def test_empty_result_is_a_valid_table(tmp_path, rng):
     assert rows["time"].shape == (0,) and rows["beam"].dtype == np.int64
     assert set(rows) >= {"time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg",
                          "freq_hz", "bandwidth_hz", "level_db", "snr_db", "beam"}
+    from arrayproc.plots import plot_file
+    plot_file(str(tmp_path / "l.h5"), str(tmp_path / "e.png"), "lines")  # an empty plot
+    assert (tmp_path / "e.png").stat().st_size > 0
 
 
 def test_config_errors():
