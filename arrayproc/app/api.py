@@ -57,7 +57,7 @@ def load_chain(path: str) -> _chain.ChainSpec:
     >>> from arrayproc.data import data_path
     >>> chain = load_chain(str(data_path("chains/towed_passive.toml")))
     >>> chain.names()
-    ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings']
+    ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings', 'lines']
     """
     cfg, text = read_toml(path, "chain")
     return chain_from_toml(cfg, text, path)
