@@ -53,6 +53,7 @@ _API = {
     "BTR": "arrayproc.stages.passive.btr",
     "LOFAR": "arrayproc.stages.passive.lofar",
     "Bearings": "arrayproc.stages.passive.bearings",
+    "Lines": "arrayproc.stages.passive.lines",
     "Power": "arrayproc.stages.passive.power",
     "PassThrough": "arrayproc.stages.passive.power",
     "Transients": "arrayproc.stages.delay.transients",

@@ -52,3 +52,10 @@ def tpsw(x: np.ndarray, half: int = 32, gap: int = 3, clip: float = 2.0) -> np.n
     out = np.empty_like(flat)
     tpsw_rows(flat, int(half), int(gap), float(clip), out)
     return out.reshape(x.shape)
+
+
+def tpsw_db(x: np.ndarray, background: np.ndarray) -> np.ndarray:
+    """Level of ``x`` over its TPSW ``background`` in dB, ``10·log10(x / background)`` (both
+    floored at 1e-300 so empty bins stay finite): 0 dB in noise, the line-to-background ratio
+    on lines; the normalisation of the LOFAR display, the bearings' lines and line contacts."""
+    return 10 * np.log10(np.maximum(x, 1e-300) / np.maximum(background, 1e-300))

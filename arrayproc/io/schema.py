@@ -125,6 +125,18 @@ _KINDS = [
         "sigma_deg": _c("deg", "σ of the azimuth from the peak's curvature and SNR; "
                         "volumetric/planar arrays", False),
     }),
+    Kind("lines", "narrowband line (tonal) contact: one per snapshot and line", {
+        "time": _c("s", "centre time of the snapshot"),
+        "cone_deg": _c("deg", "cone angle of the line, interpolated across beams "
+                       "(0 forward end-fire)"),
+        "bearing_port_deg": _c("deg", "true bearing if the source is to port"),
+        "bearing_stbd_deg": _c("deg", "true bearing if the source is to starboard"),
+        "freq_hz": _c("Hz", "frequency of the line, interpolated across bins"),
+        "bandwidth_hz": _c("Hz", "half-power width of the line"),
+        "level_db": _c("dB re 1 µPa", "received level of the tone at a hydrophone"),
+        "snr_db": _c("dB", "peak over the TPSW background"),
+        "beam": _c("", "index of the beam holding the peak", dtype="i8"),
+    }),
     Kind("doa", "root-MUSIC direction of one bin of a covariance group", {
         "time": _c("s", "mean centre time of the group's snapshots"),
         "freq": _c("Hz", "frequency of the bin"),

@@ -1,5 +1,6 @@
 """Chain stages, in folders that follow the data path: ``condition`` (DFT filter), ``beamform``
-(CBF, inverse beamforming, ETAM), ``passive`` (integration, BTR, LOFAR, bearings, band power),
+(CBF, inverse beamforming, ETAM), ``passive`` (integration, BTR, LOFAR, bearings, line
+contacts, band power),
 ``delay`` (transients, delays, TDOA localisation), ``active`` (ping beams, matched filter,
 CFAR) and ``narrowband`` (EKF bearing/frequency tracker).
 
@@ -32,6 +33,7 @@ TYPES: dict[str, str] = {
     "btr": "arrayproc.stages.passive.btr",
     "lofar": "arrayproc.stages.passive.lofar",
     "bearings": "arrayproc.stages.passive.bearings",
+    "lines": "arrayproc.stages.passive.lines",
     "power": "arrayproc.stages.passive.power",
     "pass": "arrayproc.stages.passive.power",
     "transients": "arrayproc.stages.delay.transients",
@@ -103,7 +105,7 @@ def load_chain(path: str) -> ChainSpec:
     >>> from arrayproc.data import data_path
     >>> chain = load_chain(str(data_path("chains/towed_passive.toml")))
     >>> chain.names()
-    ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings']
+    ['dft_filter', 'cbf', 'integrate', 'btr', 'lofar', 'bearings', 'lines']
     """
     from arrayproc.config import read_toml
     cfg, text = read_toml(path, "chain")

@@ -38,7 +38,8 @@ FAST = settings(max_examples=150, deadline=None,
 SLOW = settings(max_examples=3000, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
-STAGE_TYPES = ["power", "pass", "cbf", "integrate", "btr", "lofar", "bearings", "dft_filter",
+STAGE_TYPES = ["power", "pass", "cbf", "integrate", "btr", "lofar", "bearings", "lines",
+               "dft_filter",
                "ibf", "etam", "psas", "tde", "mvdr", "music", "lr_cbf", "x", ""]
 CHAIN_KEYS = ["type", "name", "input", "band", "ref", "nfft", "hop", "beams", "window",
               "snapshots", "mode", "batch", "threads", "decimate", "taper", "complex",

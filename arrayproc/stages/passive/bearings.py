@@ -56,36 +56,18 @@ from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
 from arrayproc.dsp.peaks import half_power_width, pick_peaks
-from arrayproc.dsp.tpsw import tpsw
-from arrayproc.dsp.windows import time_taper
+from arrayproc.dsp.tpsw import tpsw, tpsw_db
 from arrayproc.errors import ConfigError
 from arrayproc.io.units import recording_units, reference_amplitude
-from arrayproc.stages.passive._common import check_power_block, snapshot_times
+from arrayproc.stages.passive._common import (
+    check_power_block,
+    received_level_offset_db,
+    snapshot_times,
+)
 from arrayproc.stages.passive.bearings_azel import AZEL_COLUMNS, azel_rows
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
            "freq_lo", "freq_hi", "spl_db")
-
-
-def received_level_offset_db(b: Block, broadband: bool) -> float:
-    """dB to subtract from a beam-power level (dB re 1 µPa², the thesis's unnormalised sums)
-    to get the received level at a hydrophone of a plane wave from the beam's direction.
-
-    Per CBF snapshot a tone of amplitude A on a bin gives |Y| = N_H·N_DFT·A/2 (window and
-    shading of mean 1), so its mean square A²/2 is 2|Y|²/(N_H²·N_DFT²); a broadband wave's
-    power per bin carries the window's mean square ⟨w²⟩ as well. Integration sums N_B
-    snapshots (unless ``mean``), a synthetic aperture adds N_S snapshots coherently (×N_S²).
-    """
-    m = b.meta
-    n_h = b.positions.shape[0]
-    nfft = float(m.nfft)
-    integ = m.integration
-    n_b = 1 if (integ is None or integ.mean) else integ.snapshots
-    n_s = m.synthetic.snapshots if m.synthetic is not None else 1
-    off = 10 * np.log10(n_b * (n_h * nfft * n_s) ** 2 / 2.0)
-    if broadband:
-        off += 10 * np.log10(np.mean(time_taper(str(m.window), int(nfft)) ** 2))
-    return float(off)
 
 
 @register
@@ -260,7 +242,7 @@ class Bearings(Stage):
                offset_db: float = np.nan) -> None:
         spec = np.ascontiguousarray(p.T, dtype=np.float64)  # (B, F)
         bg = tpsw(spec, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
-        ratio_db = 10 * np.log10(np.maximum(spec, 1e-300) / np.maximum(bg, 1e-300))
+        ratio_db = tpsw_db(spec, bg)
         best = ratio_db.max(axis=0)  # (F,)
         left = np.r_[-np.inf, best[:-1]]
         right = np.r_[best[1:], -np.inf]

@@ -20,7 +20,7 @@ from arrayproc.chain import Param, Stage, positive, register
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
-from arrayproc.dsp.tpsw import tpsw
+from arrayproc.dsp.tpsw import tpsw, tpsw_db
 from arrayproc.errors import ConfigError
 from arrayproc.io.units import recording_units, reference_amplitude
 from arrayproc.stages.passive._common import beam_columns, check_power_block, snapshot_times
@@ -90,7 +90,7 @@ class LOFAR(Stage):
             if out is not None:
                 if self.normalise == "tpsw":
                     bg = tpsw(p, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
-                    db = 10 * np.log10(np.maximum(p, 1e-300) / np.maximum(bg, 1e-300))
+                    db = tpsw_db(p, bg)
                 else:
                     ref = reference_amplitude(recording_units(self.ctx.recording), self.ref)
                     db = 10 * np.log10(np.maximum(p, 1e-300) / ref**2)
