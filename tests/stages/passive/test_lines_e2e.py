@@ -14,11 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from arrayproc.chain import load_chain, run_chain
+from arrayproc.chain import run_chain
 from arrayproc.data import data_path
 from arrayproc.io.products import ProductsWriter, read_products
 from arrayproc.io.recording import Recording
 from arrayproc.io.truth import cone_angles, tonal_frequencies
+from arrayproc.stages import load_chain
 
 CHAIN = data_path("chains", "towed_passive.toml")
 NL = 60.0  # noise spectral level, dB re 1 µPa²/Hz
