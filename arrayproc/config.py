@@ -32,9 +32,13 @@ class Param:
     """A declared stage parameter.
 
     ``kind`` is one of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"band"`` (two floats,
-    lo < hi), ``"floats"`` (list of numbers), ``"table"`` (a TOML table), ``"any"``.
+    lo < hi), ``"floats"`` (list of finite numbers), ``"rows"`` (a non-empty list of equal-length
+    rows of finite numbers), ``"table"`` (a TOML table), ``"tables"`` (an array of tables; one
+    table counts as an array of one), ``"any"``.
     ``choices`` restricts strings; ``check`` returns an error text or None; ``unit`` is the SI
-    unit (or ``"deg"``, ``"dB"``, ``"samples"``...) of the value, for the generated docs.
+    unit (or ``"deg"``, ``"dB"``, ``"samples"``...) of the value, for the generated docs;
+    ``schema`` declares the keys of a ``"table"``/``"tables"`` value (read by
+    :meth:`Section.sub`).
     """
 
     kind: str
@@ -43,6 +47,7 @@ class Param:
     choices: tuple[Any, ...] | None = None
     check: Callable[[Any], str | None] | None = None
     unit: str = ""
+    schema: Schema | None = None
 
     @property
     def required(self) -> bool:
@@ -51,7 +56,9 @@ class Param:
     def convert(self, where: str, value: Any, sep: str = ": ") -> Any:
         """The value checked and converted; a ConfigError ``where + sep + what is wrong``."""
         k = self.kind
-        bad = ConfigError(f"{where}{sep}expected {k}, got {value!r}")
+        what = {"float": "must be a number", "int": "must be an integer",
+                "bool": "must be true or false", "str": "must be a string"}
+        bad = ConfigError(f"{where}{sep}{what.get(k, f'expected {k}')}, got {value!r}")
         if k == "float":
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise bad
@@ -72,12 +79,20 @@ class Param:
                     isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
                 raise bad
             value = [float(v) for v in value]
+            if not all(math.isfinite(v) for v in value):
+                raise ConfigError(f"{where}{sep}must be finite, got {value!r}")
             if k == "band" and (len(value) != 2 or not value[0] < value[1]):
                 raise ConfigError(f"{where}{sep}expected [lo, hi] with lo < hi, got {value!r}")
+        elif k == "rows":
+            value = _rows(value, bad, where, sep)
         elif k == "table":
             if not isinstance(value, Mapping):
                 raise bad
             value = dict(value)
+        elif k == "tables":
+            value = [value] if isinstance(value, Mapping) else value
+            if not isinstance(value, list) or not all(isinstance(x, Mapping) for x in value):
+                raise ConfigError(f"{where}{sep}expected an array of tables, got {value!r}")
         if self.choices is not None and value not in self.choices:
             raise ConfigError(f"{where}{sep}must be one of {', '.join(map(str, self.choices))}, "
                               f"got {value!r}")
@@ -93,7 +108,8 @@ class Param:
         """The kind as the docs write it (``float``, ``[lo, hi]``, ``"a" | "b"``...)."""
         if self.choices is not None and self.kind == "str":
             return " \\| ".join(f'"{c}"' for c in self.choices)
-        return {"band": "[lo, hi]", "floats": "list of float"}.get(self.kind, self.kind)
+        return {"band": "[lo, hi]", "floats": "list of float", "rows": "list of [float, …]",
+                "tables": "array of tables"}.get(self.kind, self.kind)
 
     @property
     def default_text(self) -> str:
@@ -149,7 +165,8 @@ class Schema(Mapping):
         return Schema({**self.params, **other}, self.summary)
 
     def check(self, values: Mapping[str, Any], where: str, *, prefix: str = "",
-              of: str = "", allow: Iterable[str] = ()) -> dict[str, Any]:
+              of: str = "", allow: Iterable[str] = (), table: str | None = None
+              ) -> dict[str, Any]:
         """Every declared key's value, converted and checked, defaults filled in.
 
         Parameters
@@ -166,6 +183,9 @@ class Schema(Mapping):
             Added after an unknown key's name (``" for type 'cbf'"``).
         allow : iterable of str
             Keys of ``values`` that are not declared but are read elsewhere.
+        table : str, optional
+            The table's name in a nested file (``"source[0].tonals[1]"``): messages then read
+            ``"{where}: [table] key: what is wrong"`` (``"{where}: top level"`` for ``""``).
 
         Returns
         -------
@@ -181,22 +201,29 @@ class Schema(Mapping):
         if not isinstance(values, Mapping):
             raise ConfigError(f"{where}: must be a table, got {values!r}")
         allowed = set(allow)
+        at = None if table is None else (f"[{table}]" if table else "top level")
 
         def name(key: str) -> str:
             return prefix + key if prefix else repr(key)
 
+        def site(key: str) -> str:
+            if at is not None:
+                return f"{where}: {at} {key}"
+            return f"{where}: {prefix}{key}" if prefix else f"{where}: key {key!r}"
+
         for key in values:
             if key not in self.params and key not in allowed:
-                raise ConfigError(f"{where}: unknown key {name(key)}{of} "
+                head = f"{where}: {at}:" if at is not None else f"{where}:"
+                raise ConfigError(f"{head} unknown key {name(key)}{of} "
                                   f"(known: {', '.join(sorted(self.params)) or 'none'})")
         out: dict[str, Any] = {}
         for key, p in self.params.items():
             v = values.get(key)
             if key in values and (v is not None or p.default is not None):
-                out[key] = p.convert(f"{where}: {prefix}{key}" if prefix else
-                                     f"{where}: key {key!r}", v, sep=" " if prefix else ": ")
+                out[key] = p.convert(site(key), v, sep=" " if prefix and at is None else ": ")
             elif p.required:
-                raise ConfigError(f"{where}: missing required key {name(key)}")
+                raise ConfigError(f"{site(key)}: missing (required)" if at is not None else
+                                  f"{where}: missing required key {name(key)}")
             else:
                 out[key] = p.default
         return out
@@ -261,9 +288,50 @@ _ANNOTATIONS: dict[str, Any] = {"float": float, "int": int, "bool": bool, "str":
                                 "band": list[float], "floats": list[float], "table": dict}
 
 
+def _rows(value: Any, bad: ConfigError, where: str, sep: str) -> list[list[float]]:
+    """A ``"rows"`` value: a non-empty list of equal-length lists of finite numbers."""
+    def number(x: Any) -> bool:
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+    if (not isinstance(value, list) or not value
+            or not all(isinstance(r, list) and r and all(number(x) for x in r) for r in value)
+            or len({len(r) for r in value}) != 1):
+        raise bad
+    out = [[float(x) for x in r] for r in value]
+    if not all(math.isfinite(x) for r in out for x in r):
+        raise ConfigError(f"{where}{sep}must be finite, got {value!r}")
+    return out
+
+
 def positive(v: Any) -> str | None:
     """Check for :class:`Param`: the value must be > 0."""
     return None if v > 0 else f"must be > 0, got {v}"
+
+
+def non_negative(v: Any) -> str | None:
+    """Check for :class:`Param`: the value must be >= 0."""
+    return None if v >= 0 else f"must be >= 0, got {v}"
+
+
+def at_least(lo: float) -> Callable[[Any], str | None]:
+    """Check for :class:`Param`: the value must be >= ``lo``."""
+    def check(v: Any) -> str | None:
+        return None if v >= lo else f"must be >= {lo}, got {v}"
+    return check
+
+
+def length(n: int) -> Callable[[Any], str | None]:
+    """Check for a ``"floats"`` :class:`Param`: exactly ``n`` numbers."""
+    def check(v: Any) -> str | None:
+        return None if len(v) == n else f"must be {n} numbers, got {v!r}"
+    return check
+
+
+def columns(n: int) -> Callable[[Any], str | None]:
+    """Check for a ``"rows"`` :class:`Param`: rows of exactly ``n`` numbers."""
+    def check(v: Any) -> str | None:
+        return None if len(v[0]) == n else f"must be a list of rows of {n} numbers, got {v!r}"
+    return check
 
 
 def read_toml(path: str | os.PathLike, what: str) -> tuple[dict[str, Any], str]:
@@ -323,150 +391,75 @@ def parse_toml(text: str, where: str) -> dict[str, Any]:
         raise ConfigError(f"{where}: invalid TOML ({e})") from None
 
 
-class Table:
-    """A TOML table being read with typed getters (scenarios, trackers, TMA and batch files).
+class Section:
+    """One table of a nested TOML file (a scenario) checked against its :class:`Schema`.
 
-    Every getter names the file, the table and the key in its error; :meth:`done` reports the
-    first key that no getter asked for (a typo). Chain stages declare their keys with
-    :class:`Param` instead, checked the same way by :class:`arrayproc.chain.Stage`.
+    On construction every key is checked by :meth:`Schema.check` (unknown keys refused,
+    values converted, defaults filled); ``section[key]`` is the checked value. Tables inside
+    it (a :class:`Param` of kind ``"table"``/``"tables"`` with a ``schema``) are read with
+    :meth:`sub`/:meth:`subs`, checked the same way. Rules across keys (one of two keys,
+    a default that depends on another key) stay with the reader, which raises :meth:`err`.
+
+    Parameters
+    ----------
+    data : mapping
+        The table as parsed.
+    schema : Schema
+        Its declared keys.
+    where : str
+        The table's dotted path (``"source[1].tonals[0]"``); empty at the top level.
+    file : str
+        The file, first in every message.
     """
 
-    def __init__(self, data: Any, where: str, file: str) -> None:
-        if not isinstance(data, dict):
+    def __init__(self, data: Any, schema: Schema, where: str, file: str) -> None:
+        if not isinstance(data, Mapping):
             raise ConfigError(f"{file}: [{where}] must be a table")
         self.d = data
+        self.schema = schema
         self.where = where
         self.file = file
-        self.used: set[str] = set()
+        self.values = schema.check(data, file, table=where)
+
+    def __getitem__(self, key: str) -> Any:
+        return self.values[key]
 
     def err(self, key: str, msg: str) -> ConfigError:
+        """The one-line error of ``key`` in this table."""
         return ConfigError(f"{self.file}: [{self.where}] {key}: {msg}")
 
     def has(self, key: str) -> bool:
+        """Whether the file gives ``key`` (a default does not count)."""
         return key in self.d
 
-    def raw(self, key: str, default: Any = None) -> Any:
-        self.used.add(key)
-        return self.d.get(key, default)
+    def need(self, key: str, why: str = "") -> Any:
+        """``self[key]``, which must be given (a key whose need depends on another)."""
+        if self.values[key] is None:
+            raise self.err(key, f"missing{' (' + why + ')' if why else ''}")
+        return self.values[key]
 
-    def num(self, key: str, default: float | None = None, *, required: bool = False,
-            positive: bool = False, nonneg: bool = False) -> float | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a number is required)")
-            return default
-        v = self.d[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.err(key, f"must be a number, got {type(v).__name__} {v!r}")
-        v = float(v)
-        if not math.isfinite(v):
-            raise self.err(key, "must be finite")
-        if positive and v <= 0:
-            raise self.err(key, f"must be > 0, got {v}")
-        if nonneg and v < 0:
-            raise self.err(key, f"must be >= 0, got {v}")
-        return v
-
-    def int_(self, key: str, default: int | None = None, *, required: bool = False,
-             minimum: int | None = None) -> int | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (an integer is required)")
-            return default
-        v = self.d[key]
-        if isinstance(v, bool) or not isinstance(v, int):
-            raise self.err(key, f"must be an integer, got {type(v).__name__} {v!r}")
-        if minimum is not None and v < minimum:
-            raise self.err(key, f"must be >= {minimum}, got {v}")
-        return int(v)
-
-    def str_(self, key: str, default: str | None = None, *, required: bool = False,
-             choices: tuple[str, ...] | None = None) -> str | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a string is required)")
-            return default
-        v = self.d[key]
-        if not isinstance(v, str):
-            raise self.err(key, f"must be a string, got {type(v).__name__} {v!r}")
-        if choices is not None and v not in choices:
-            raise self.err(key, f"must be one of {', '.join(choices)}, got {v!r}")
-        return v
-
-    def bool_(self, key: str, default: bool) -> bool:
-        self.used.add(key)
-        if key not in self.d:
-            return default
-        v = self.d[key]
-        if not isinstance(v, bool):
-            raise self.err(key, f"must be true or false, got {v!r}")
-        return v
-
-    def vec(self, key: str, n: int | None = None, default: Any = None, *,
-            required: bool = False) -> np.ndarray | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, "missing (a list of numbers is required)")
-            return None if default is None else np.asarray(default, float)
-        v = self.d[key]
-        ok = isinstance(v, list) and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
-        if not ok or (n is not None and len(v) != n):
-            what = f"{n} numbers" if n is not None else "a list of numbers"
-            raise self.err(key, f"must be {what}, got {v!r}")
-        a = np.asarray(v, dtype=float)
-        if not np.all(np.isfinite(a)):
-            raise self.err(key, "must be finite")
-        return a
-
-    def matrix(self, key: str, ncol: int, *, required: bool = False) -> np.ndarray | None:
-        self.used.add(key)
-        if key not in self.d:
-            if required:
-                raise self.err(key, f"missing (a list of [{ncol} numbers] rows is required)")
-            return None
-        v = self.d[key]
-        try:
-            a = np.asarray(v, dtype=float)
-        except (TypeError, ValueError):
-            a = None
-        if (a is None or a.ndim != 2 or a.shape[1] != ncol or a.shape[0] == 0
-                or any(isinstance(x, bool) for row in v for x in row)):
-            raise self.err(key, f"must be a list of rows of {ncol} numbers, got {v!r}")
-        if not np.all(np.isfinite(a)):
-            raise self.err(key, "must be finite")
-        return a
-
-    def sub(self, key: str, required: bool = False) -> Table | None:
-        self.used.add(key)
+    def sub(self, key: str, required: bool = False) -> Section | None:
+        """The sub-table ``key`` checked against its declared schema; None when absent."""
         if key not in self.d:
             if required:
                 raise ConfigError(f"{self.file}: [{self._child(key)}] is missing")
             return None
-        return Table(self.d[key], self._child(key), self.file)
+        return Section(self.d[key], self._schema(key), self._child(key), self.file)
 
-    def subs(self, key: str) -> list[Table]:
-        """An array of tables (``[[where.key]]``), possibly empty."""
-        self.used.add(key)
-        v = self.d.get(key, [])
-        if isinstance(v, dict):
-            v = [v]
-        if not isinstance(v, list):
-            raise self.err(key, "must be an array of tables")
-        return [Table(x, f"{self._child(key)}[{i}]", self.file) for i, x in enumerate(v)]
+    def subs(self, key: str) -> list[Section]:
+        """The array of tables ``key`` (``[[where.key]]``), possibly empty."""
+        schema = self._schema(key)
+        return [Section(x, schema, f"{self._child(key)}[{i}]", self.file)
+                for i, x in enumerate(self.values[key] or [])]
+
+    def _schema(self, key: str) -> Schema:
+        s = self.schema[key].schema
+        if s is None:
+            raise TypeError(f"key {key!r} declares no schema for its table")
+        return s
 
     def _child(self, key: str) -> str:
         return f"{self.where}.{key}" if self.where else key
-
-    def done(self) -> None:
-        unknown = sorted(set(self.d) - self.used)
-        if unknown:
-            where = f"[{self.where}]" if self.where else "top level"
-            raise ConfigError(f"{self.file}: {where}: unknown key {unknown[0]!r}")
 
 
 def resolve_beside(path: str, rel_to: str) -> str:

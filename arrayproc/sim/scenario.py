@@ -1,5 +1,7 @@
 """Scenario files (TOML) → validated, typed scenario objects (format in docs/formats.md).
 
+Every key is declared once in :mod:`arrayproc.sim.scenario_keys`; each table is read through
+its schema (:class:`~arrayproc.config.Section`), and the rules across keys are checked here.
 Every user mistake (unknown key, wrong type, missing key, impossible value) raises one
 :class:`ConfigError` naming the file and the key, before anything is written.
 """
@@ -14,58 +16,65 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import Table as _Table
-from arrayproc.config import read_toml
+from arrayproc.config import Section, read_toml
 from arrayproc.dsp.fracdelay import PASSBAND
 from arrayproc.errors import ConfigError
 from arrayproc.geo.kinematics import KNOT, Trajectory
 from arrayproc.io.geometry import line_array, triplet_array, twin_line_array
+from arrayproc.sim.scenario_keys import MAX_LEVEL_DB, SCENARIO, WAVEFORM
 from arrayproc.sim.unsteady import NODE
 
+__all__ = ["load_scenario", "parse_scenario", "tetrahedron", "MAX_LEVEL_DB"]
 
-def _speed(t: _Table, required: bool = True) -> float | None:
+
+def _speed(t: Section, required: bool = True) -> float | None:
     """``speed`` (m/s) or ``speed_kn`` (knots)."""
     if t.has("speed") and t.has("speed_kn"):
         raise t.err("speed", "give speed (m/s) or speed_kn (knots), not both")
     if t.has("speed_kn"):
-        return t.num("speed_kn", nonneg=True) * KNOT
-    return t.num("speed", 0.0 if not required else None, required=required, nonneg=True)
+        return t["speed_kn"] * KNOT
+    if t.has("speed"):
+        return t["speed"]
+    if required:
+        raise t.err("speed", "missing (a number is required)")
+    return 0.0
 
 
-def _trajectory(t: _Table) -> tuple[Trajectory, bool]:
+def _legs(t: Section) -> list[dict[str, Any]]:
+    """The ``[[leg]]`` tables as :meth:`Trajectory.from_legs` reads them."""
+    legs = []
+    for lt in t.subs("leg"):
+        leg = {"course": lt["course"], "speed": _speed(lt), "duration": lt["duration"]}
+        if lt.has("turn_rate"):
+            leg["turn_rate"] = lt["turn_rate"]
+        if lt.has("turn"):
+            leg["turn"] = lt["turn"]
+        legs.append(leg)
+    return legs
+
+
+def _trajectory(t: Section) -> tuple[Trajectory, bool]:
     """``start`` [x, y] and either ``course``+``speed``/``speed_kn`` or ``[[leg]]``s, or
     ``heading`` (static). Returns (trajectory, static)."""
-    start = t.vec("start", 2, default=[0.0, 0.0])
-    if t.has("heading") and (t.has("leg") or t.has("course") or t.has("speed")
-                             or t.has("speed_kn")):
+    start = np.asarray(t["start"], float)
+    moving = t.has("course") or t.has("speed") or t.has("speed_kn")
+    if t.has("heading") and (t.has("leg") or moving):
         raise t.err("heading", "only for a static track (the heading of a moving one is its "
                     "course); give heading or course/speed/legs, not both")
-    legs_t = t.subs("leg")
-    if legs_t:
-        if t.has("course") or t.has("speed") or t.has("speed_kn"):
+    if t.has("leg"):
+        if moving:
             raise t.err("leg", "give legs or course/speed, not both")
-        legs = []
-        for lt in legs_t:
-            leg = {"course": lt.num("course", required=True), "speed": _speed(lt),
-                   "duration": lt.num("duration", required=True, nonneg=True)}
-            if lt.has("turn_rate"):
-                leg["turn_rate"] = lt.num("turn_rate", positive=True)
-            if lt.has("turn"):
-                leg["turn"] = lt.str_("turn", choices=("shortest", "port", "starboard"))
-            lt.done()
-            legs.append(leg)
         try:
-            return Trajectory.from_legs(start, legs), False
+            return Trajectory.from_legs(start, _legs(t)), False
         except ConfigError as e:
             raise ConfigError(f"{t.file}: [{t.where}]: {e}") from None
-    if t.has("course") or t.has("speed") or t.has("speed_kn"):
-        course = t.num("course", required=True)
+    if moving:
+        course = t.need("course", "a number is required")
         speed = _speed(t)
         # one open-ended leg (held after its end by Trajectory)
         traj = Trajectory.from_legs(start, [{"course": course, "speed": speed, "duration": 0.0}])
         return traj, speed == 0.0
-    heading = t.num("heading", 0.0)
-    return Trajectory.static(start, heading), True
+    return Trajectory.static(start, t["heading"] or 0.0), True
 
 
 # -- scenario objects ----------------------------------------------------------------------
@@ -289,110 +298,89 @@ def tetrahedron(side: float) -> np.ndarray:
     return np.vstack([base, [[0.0, 0.0, -0.75 * h]]])
 
 
-#: Largest source level accepted, dB re 1 µPa @ 1 m: far above any real source (about 270 dB
-#: for the loudest explosions), low enough that 10^(L/20) stays finite in float64.
-MAX_LEVEL_DB = 300.0
+def _only(t: Section, keys: tuple[str, ...], when: str) -> None:
+    """Refuse any of ``keys`` given where they do not apply (``when`` says where they do)."""
+    for k in keys:
+        if t.has(k):
+            raise t.err(k, f"only {when}")
 
 
-def _level(t: _Table, key: str, default: float | None = None, required: bool = False
-           ) -> float | None:
-    v = t.num(key, default, required=required)
-    if v is not None and abs(v) > MAX_LEVEL_DB:
-        raise t.err(key, f"{v:g} dB is not a physical level (|level| <= {MAX_LEVEL_DB:g} dB)")
-    return v
-
-
-def _check_speed(t: _Table, traj: Trajectory, c: float) -> None:
+def _check_speed(t: Section, traj: Trajectory, c: float) -> None:
     """A platform moves slower than sound (the simulator's retarded-time solver needs it)."""
     fastest = max((seg.speed for seg in traj.segments), default=0.0)
     if fastest >= c:
         raise t.err("speed", f"{fastest:g} m/s is not below the sound speed {c:g} m/s")
 
 
-def _tonals(t: _Table, fs: float) -> list[Tonal]:
+def _tonals(t: Section, fs: float) -> list[Tonal]:
     out = []
-    raw = t.raw("tonals", [])
-    if not isinstance(raw, list):
-        raise t.err("tonals", "must be a list of {freq, level_db} tables")
-    for i, x in enumerate(raw):
-        tt = _Table(x, f"{t.where}.tonals[{i}]", t.file)
-        f = tt.num("freq", required=True, positive=True)
+    node = NODE / (2.0 * fs)  # the processes' grid spacing (source rate 2·fs)
+    for tt in t.subs("tonals"):
+        f = tt["freq"]
         if f > PASSBAND * fs:
             raise tt.err("freq", f"{f} Hz is above the simulator's band "
                          f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-        ton = Tonal(f, _level(tt, "level_db", required=True), tt.num("phase_deg", None),
-                    tt.num("drift_hz_per_s", 0.0), tt.num("coherence_time", None, positive=True),
-                    tt.num("fading_db", 0.0, nonneg=True),
-                    tt.num("fading_time", 10.0, positive=True))
-        node = NODE / (2.0 * fs)  # the processes' grid spacing (source rate 2·fs)
+        ton = Tonal(f, tt["level_db"], tt["phase_deg"], tt["drift_hz_per_s"],
+                    tt["coherence_time"], tt["fading_db"], tt["fading_time"])
         for key, v in (("coherence_time", ton.coherence_time), ("fading_time",
                                                                   ton.fading_time)):
             if v is not None and v < 50 * node and (key == "coherence_time" or ton.fading_db):
                 raise tt.err(key, f"{v:g} s is too short for the simulator's grid of "
                              f"{node * 1e3:.2f} ms (at least {50 * node:.3g} s)")
         out.append(ton)
-        tt.done()
     return out
 
 
-def _broadband(t: _Table | None, fs: float) -> Broadband | None:
+def _broadband(t: Section | None, fs: float) -> Broadband | None:
     if t is None:
         return None
-    band = t.vec("band", 2, required=True)
+    band = t["band"]
     if not (0 <= band[0] < band[1]):
-        raise t.err("band", f"must be [lo, hi] with 0 <= lo < hi, got {band.tolist()}")
+        raise t.err("band", f"must be [lo, hi] with 0 <= lo < hi, got {band}")
     if band[1] > PASSBAND * fs:
         raise t.err("band", f"upper edge {band[1]} Hz is above the simulator's band "
                     f"({PASSBAND:g}·fs = {PASSBAND * fs:g} Hz)")
-    model = t.str_("model", "flat", choices=("flat", "speed"))
-    level = _level(t, "level_db", None, required=(model == "flat"))
+    model, level = t["model"], t["level_db"]
+    if model == "flat" and level is None:
+        raise t.err("level_db", "missing (a number is required)")
     if model == "speed" and level is not None:
         raise t.err("level_db", "not used with model = \"speed\" (the level follows the speed)")
-    slope = t.num("slope_db_per_octave", 0.0)
-    t.done()
-    return Broadband((float(band[0]), float(band[1])), level, model, slope)
+    return Broadband((float(band[0]), float(band[1])), level, model, t["slope_db_per_octave"])
 
 
-def _multipath(pt: _Table, loss: str) -> MultipathSpec:
+def _multipath(pt: Section, loss: str) -> MultipathSpec:
     """The ``multipath = { … }`` inline table of ``[propagation]``."""
-    if not isinstance(pt.raw("multipath"), dict):
+    if not isinstance(pt["multipath"], dict):
         raise pt.err("multipath", "must be a table {surface, bottom_depth, bottom_loss_db, "
-                     f"order, …}} or \"bellhop\", got {pt.raw('multipath')!r}")
+                     f"order, …}} or \"bellhop\", got {pt['multipath']!r}")
     if loss != "spherical":
         raise pt.err("multipath", f"image sources need loss = \"spherical\" (a {loss} law "
                      "already stands for the boundaries' contribution)")
     mt = pt.sub("multipath")
-    spec = MultipathSpec(mt.bool_("surface", True), mt.num("bottom_depth", None, positive=True),
-                         mt.num("bottom_loss_db", 0.0, nonneg=True), mt.int_("order", 1, minimum=0),
-                         mt.num("surface_rms_height", 0.0, nonneg=True),
-                         mt.num("roughness_freq", 0.0, nonneg=True))
+    spec = MultipathSpec(mt["surface"], mt["bottom_depth"], mt["bottom_loss_db"], mt["order"],
+                         mt["surface_rms_height"], mt["roughness_freq"])
     if spec.surface_rms_height > 0 and spec.roughness_freq <= 0:
         raise mt.err("roughness_freq", "required (> 0 Hz) with surface_rms_height > 0: the "
                      "Rayleigh parameter 2kσ sin θ is evaluated at this frequency")
     if spec.surface_rms_height > 0 and not spec.surface:
         raise mt.err("surface_rms_height", "needs surface = true")
-    mt.done()
     return spec
 
 
-def _bellhop(pt: _Table, loss: str, c: float) -> BellhopSpec:
+def _bellhop(pt: Section, loss: str, c: float) -> BellhopSpec:
     """``multipath = "bellhop"`` and its ``[propagation.bellhop]`` environment."""
     if loss != "spherical":
         raise pt.err("multipath", f"BELLHOP arrivals replace the loss law; leave loss = "
                      f"\"spherical\" (got {loss!r})")
-    bt = pt.sub("bellhop") or _Table({}, "propagation.bellhop", pt.file)
-    ssp = bt.matrix("ssp", 2)
+    bt = pt.sub("bellhop") or Section({}, pt.schema["bellhop"].schema, "propagation.bellhop",
+                                      pt.file)
+    ssp = None if bt["ssp"] is None else np.asarray(bt["ssp"], float)
     munk = not bt.has("depth")
     if munk and ssp is not None:
         raise bt.err("ssp", "give the bottom depth too")
-    spec = BellhopSpec(bt.num("depth", None, positive=True),
-                       bt.num("freq", None, positive=True),
-                       bt.num("max_range", None, positive=True),
-                       bt.num("range_step", 10.0, positive=True), ssp,
-                       bt.num("bottom_speed", 1600.0, positive=True),
-                       bt.num("bottom_density", 1.8, positive=True),
-                       bt.num("bottom_atten", 0.8 if munk else 0.5, nonneg=True),
-                       bt.int_("n_beams", 0, minimum=0))
+    atten = bt["bottom_atten"] if bt.has("bottom_atten") else (0.8 if munk else 0.5)
+    spec = BellhopSpec(bt["depth"], bt["freq"], bt["max_range"], bt["range_step"], ssp,
+                       bt["bottom_speed"], bt["bottom_density"], atten, bt["n_beams"])
     if munk:  # the environment of the bundled TL tables (SPL paper appendix)
         from arrayproc.acoustics.tl.bellhop import MUNK_APPENDIX
         spec.depth, spec.ssp = float(MUNK_APPENDIX[-1, 0]), MUNK_APPENDIX.copy()
@@ -401,7 +389,6 @@ def _bellhop(pt: _Table, loss: str, c: float) -> BellhopSpec:
         raise bt.err("ssp", "depths must increase from 0 to the bottom depth")
     if spec.max_range is not None and spec.max_range / spec.range_step > 20000:
         raise bt.err("range_step", "more than 20000 ranges; use a coarser step")
-    bt.done()
     return spec
 
 
@@ -448,7 +435,7 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                    base_dir: Path | None = None) -> Scenario:
     """Validate a scenario given as a dict (as loaded from TOML): the tables in file order,
     then the checks across tables (waveguide, BELLHOP, tonal drift)."""
-    root = _Table(data, "", file)
+    root = Section(data, SCENARIO, "", file)
     fs, duration, c, seed, start_time, chunk, truth_interval, nav_interval = _recording(root)
     array, at = _array(root)
     own, own_static = _ownship(root, c)
@@ -460,7 +447,6 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     prop = _propagation(root, c, base_dir)
     noise = _noise(root, fs, own, sources, file)
     active = _active(root.sub("active"), fs, sources, file) if root.has("active") else None
-    root.done()
     if prop.multipath is not None:
         _check_waveguide(prop.multipath, array, sources, active, file)
     if prop.bellhop is not None:
@@ -476,125 +462,122 @@ def parse_scenario(data: dict, file: str = "<scenario>",
                     nav_interval, array, own, own_static, sources, prop, noise, active)
 
 
-def _recording(root: _Table) -> tuple:
+def _recording(root: Section) -> tuple:
     """``[recording]``: (fs, duration, sound speed, seed, start time, chunk, truth and nav
     intervals)."""
     rec = root.sub("recording", required=True)
-    fs = rec.num("fs", required=True, positive=True)
-    duration = rec.num("duration", required=True, positive=True)
-    c = rec.num("sound_speed", 1500.0, positive=True)
-    seed = rec.int_("seed", 0, minimum=0)
-    start_time = rec.str_("start_time", None)
+    start_time = rec["start_time"]
     if start_time is not None:
         try:
             datetime.fromisoformat(start_time.replace("Z", "+00:00"))
         except ValueError:
             raise rec.err("start_time", f"not an ISO-8601 time: {start_time!r}") from None
-    chunk = rec.int_("chunk", 8192, minimum=64)
-    truth_interval = rec.num("truth_interval", 1.0, positive=True)
-    nav_interval = rec.num("nav_interval", 1.0, positive=True)
-    rec.done()
-    return fs, duration, c, seed, start_time, chunk, truth_interval, nav_interval
+    return (rec["fs"], rec["duration"], rec["sound_speed"], rec["seed"], start_time,
+            rec["chunk"], rec["truth_interval"], rec["nav_interval"])
 
 
-def _array(root: _Table) -> tuple[ArraySpec, _Table]:
+#: The layout keys each array type reads (the others are refused for it).
+_LAYOUT_KEYS = {"line": ("n", "spacing"), "twin": ("n", "spacing", "separation"),
+                "triplet": ("n", "spacing", "radius"), "tetrahedron": ("side",),
+                "positions": ("positions",)}
+
+
+def _array(root: Section) -> tuple[ArraySpec, Section]:
     """``[array]``: the element layout of its ``type`` and the error and shape keys; the
     spec and the table (for messages about it)."""
     at = root.sub("array", required=True)
-    kind = at.str_("type", "line", choices=("line", "positions", "tetrahedron", "twin",
-                                             "triplet"))
-    if kind in ("line", "twin", "triplet"):
-        n = at.int_("n", required=True, minimum=1)
-        spacing = at.num("spacing", required=True, positive=True)
-        if kind == "twin":
-            pos = twin_line_array(n, spacing, at.num("separation", required=True,
-                                                     positive=True))
-        elif kind == "triplet":
-            pos = triplet_array(n, spacing, at.num("radius", required=True, positive=True))
-        else:
-            pos = line_array(n, spacing)
+    kind = at["type"]
+    used = _LAYOUT_KEYS[kind]
+    for k in ("n", "spacing", "separation", "radius", "side", "positions"):
+        if at.has(k) and k not in used:
+            types = [t for t, ks in _LAYOUT_KEYS.items() if k in ks]
+            raise at.err(k, f"not used by type = {kind!r} (only {' / '.join(types)})")
+    need = {k: at.need(k, "required by type = " + repr(kind)) for k in used}
+    if kind == "twin":
+        pos = twin_line_array(need["n"], need["spacing"], need["separation"])
+    elif kind == "triplet":
+        pos = triplet_array(need["n"], need["spacing"], need["radius"])
+    elif kind == "line":
+        pos = line_array(need["n"], need["spacing"])
     elif kind == "tetrahedron":
-        pos = tetrahedron(at.num("side", required=True, positive=True))
+        pos = tetrahedron(need["side"])
     else:
-        pos = at.matrix("positions", 3, required=True)
-    array = ArraySpec(pos, at.num("depth", 0.0),
-                      at.num("position_error_std", 0.0, nonneg=True),
-                      at.num("lateral_std", 0.0, nonneg=True),
-                      at.num("lateral_snapshot", 1.0, positive=True),
-                      at.str_("shape", "rigid", choices=("rigid", "water_pulled")))
-    at.done()
+        pos = np.asarray(need["positions"], float)
+    array = ArraySpec(pos, at["depth"], at["position_error_std"], at["lateral_std"],
+                      at["lateral_snapshot"], at["shape"])
     return array, at
 
 
-def _ownship(root: _Table, c: float) -> tuple[Trajectory, bool]:
+def _ownship(root: Section, c: float) -> tuple[Trajectory, bool]:
     """``[ownship]``: its trajectory and whether it is static (no table: at the origin)."""
     ot = root.sub("ownship")
     if ot is None:
         return Trajectory.static((0.0, 0.0), 0.0), True
     own, own_static = _trajectory(ot)
     _check_speed(ot, own, c)
-    ot.done()
     return own, own_static
 
 
-def _sources(root: _Table, fs: float, c: float, file: str) -> list[SourceSpec]:
+def _plain_name(t: Section, key: str, name: str, what: str) -> None:
+    if not name or "/" in name or name in (".", ".."):
+        raise t.err(key, f"{name!r} must be a plain name (not empty, no '/', not '.' or "
+                    f"'..'): it names {what}")
+
+
+def _sources(root: Section, fs: float, c: float, file: str) -> list[SourceSpec]:
     """The ``[[source]]`` tables: unique plain names, a trajectory, tonals or broadband."""
     sources: list[SourceSpec] = []
     names: set[str] = set()
     for i, st in enumerate(root.subs("source")):
-        name = st.str_("name", f"source{i}")
+        name = st["name"] if st["name"] is not None else f"source{i}"
         if name in names or name in ("ownship", "towship"):
             raise st.err("name", f"duplicate or reserved source name {name!r}")
-        if not name or "/" in name or name in (".", ".."):
-            raise st.err("name", f"{name!r} must be a plain name (not empty, no '/', not '.' "
-                         "or '..'): it names the source's /truth group")
+        _plain_name(st, "name", name, "the source's /truth group")
         names.add(name)
         traj, _ = _trajectory(st)
         _check_speed(st, traj, c)
-        depth = st.num("depth", 0.0)
         tonals = _tonals(st, fs)
         bb = _broadband(st.sub("broadband"), fs)
-        st.done()
         if not tonals and bb is None:
             raise ConfigError(f"{file}: [{st.where}]: a source needs tonals or [broadband]")
-        sources.append(SourceSpec(name, traj, depth, tonals, bb))
+        sources.append(SourceSpec(name, traj, st["depth"], tonals, bb))
     return sources
 
 
-def _propagation(root: _Table, c: float, base_dir: Path | None) -> Propagation:
+def _propagation(root: Section, c: float, base_dir: Path | None) -> Propagation:
     """``[propagation]``: the loss law (a TL table from a file or inline), multipath."""
     prop = Propagation()
     pt = root.sub("propagation")
     if pt is None:
         return prop
-    prop.loss = pt.str_("loss", "spherical", choices=("spherical", "cylindrical", "table"))
-    prop.transition_range = pt.num("transition_range", 1.0, positive=True)
-    if prop.loss == "table":
-        if pt.has("file"):
-            f = Path(pt.str_("file"))
-            if not f.is_absolute() and base_dir is not None:
-                f = base_dir / f
-            if not f.exists():
-                raise pt.err("file", f"no such TL table {str(f)!r}")
-            prop.table_path = str(f)
-        else:
-            r = pt.vec("range_m", required=True)
-            tl = pt.vec("tl_db", required=True)
-            if r.size != tl.size or r.size < 2 or np.any(np.diff(r) <= 0):
-                raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
-                             "and range_m must increase")
-            prop.table_range, prop.table_tl = r, tl
-    if pt.has("multipath") and pt.raw("multipath") == "bellhop":
+    prop.loss, prop.transition_range = pt["loss"], pt["transition_range"]
+    if prop.loss != "table":
+        _only(pt, ("file", "range_m", "tl_db"), "with loss = \"table\"")
+    elif pt.has("file"):
+        f = Path(pt["file"])
+        if not f.is_absolute() and base_dir is not None:
+            f = base_dir / f
+        if not f.exists():
+            raise pt.err("file", f"no such TL table {str(f)!r}")
+        _only(pt, ("range_m", "tl_db"), "without file (an inline table)")
+        prop.table_path = str(f)
+    else:
+        r = np.asarray(pt.need("range_m", "a list of numbers is required"), float)
+        tl = np.asarray(pt.need("tl_db", "a list of numbers is required"), float)
+        if r.size != tl.size or r.size < 2 or np.any(np.diff(r) <= 0):
+            raise pt.err("range_m", "range_m and tl_db must have the same length >= 2 "
+                         "and range_m must increase")
+        prop.table_range, prop.table_tl = r, tl
+    if pt.has("multipath") and pt["multipath"] == "bellhop":
         prop.bellhop = _bellhop(pt, prop.loss, c)
     elif pt.has("multipath"):
         prop.multipath = _multipath(pt, prop.loss)
     if pt.has("bellhop") and prop.bellhop is None:
         raise pt.err("bellhop", "only with multipath = \"bellhop\"")
-    pt.done()
     return prop
 
 
-def _noise(root: _Table, fs: float, own: Trajectory, sources: list[SourceSpec],
+def _noise(root: Section, fs: float, own: Trajectory, sources: list[SourceSpec],
            file: str) -> NoiseSpec | None:
     """``[noise]``: a flat level or a spectrum; its ``[noise.towship]`` is appended to
     ``sources`` as a source following the ownship's path ``distance`` m ahead."""
@@ -602,8 +585,8 @@ def _noise(root: _Table, fs: float, own: Trajectory, sources: list[SourceSpec],
     if nt is None:
         return None
     noise = None
-    lvl = nt.num("level_db", None)
-    spec = nt.matrix("spectrum", 2)
+    lvl = nt["level_db"]
+    spec = None if nt["spectrum"] is None else np.asarray(nt["spectrum"], float)
     if lvl is not None and spec is not None:
         raise nt.err("spectrum", "give level_db (flat) or spectrum, not both")
     if spec is not None and (np.any(spec[:, 0] <= 0) or np.any(np.diff(spec[:, 0]) <= 0)):
@@ -612,17 +595,13 @@ def _noise(root: _Table, fs: float, own: Trajectory, sources: list[SourceSpec],
         noise = NoiseSpec(lvl, spec)
     tt = nt.sub("towship")
     if tt is not None:
-        dist = tt.num("distance", 300.0)
-        depth = tt.num("depth", 5.0)
         tonals = _tonals(tt, fs)
         bb = _broadband(tt.sub("broadband"), fs)
-        tt.done()
         if not tonals and bb is None:
             raise ConfigError(f"{file}: [{tt.where}]: the tow ship needs tonals or "
                               "[broadband]")
-        sources.append(SourceSpec("towship", own, depth, tonals, bb, lead=dist,
-                                  kind="towship"))
-    nt.done()
+        sources.append(SourceSpec("towship", own, tt["depth"], tonals, bb,
+                                  lead=tt["distance"], kind="towship"))
     return noise
 
 
@@ -637,22 +616,26 @@ def _check_drift(sources: list[SourceSpec], duration: float, fs: float, file: st
                                   f"{PASSBAND * fs:g}] Hz")
 
 
-def _waveform(t: _Table, fs: float, file: str) -> Any:
+#: The waveform keys each kind reads.
+_WAVE_KEYS = {"bpsk": ("fc", "bits"), "hfm": ("f0", "f1"), "cw": ("fc",)}
+
+
+def _waveform(t: Section, fs: float, file: str) -> Any:
     """One waveform from ``waveform`` (kind), ``duration``, ``taper`` and the kind's keys."""
     from arrayproc.acoustics import waveforms as wf
 
-    kind = t.str_("waveform", required=True, choices=("bpsk", "hfm", "cw"))
-    dur = t.num("duration", required=True, positive=True)
-    taper = t.num("taper", 0.05, nonneg=True)
+    kind = t.need("waveform", "a string is required")
+    dur = t.need("duration", "a number is required")
+    _only(t, tuple(k for k in ("fc", "bits", "f0", "f1") if k not in _WAVE_KEYS[kind]),
+          f"with another waveform (not {kind})")
+    need = {k: t.need(k, "a number is required") for k in _WAVE_KEYS[kind]}
     try:
         if kind == "bpsk":
-            w = wf.bpsk(t.num("fc", required=True, positive=True), dur,
-                        t.int_("bits", 1023, minimum=3), taper)
+            w = wf.bpsk(need["fc"], dur, need["bits"], t["taper"])
         elif kind == "hfm":
-            w = wf.hfm(t.num("f0", required=True, positive=True),
-                       t.num("f1", required=True, positive=True), dur, taper)
+            w = wf.hfm(need["f0"], need["f1"], dur, t["taper"])
         else:
-            w = wf.cw(t.num("fc", required=True, positive=True), dur, taper)
+            w = wf.cw(need["fc"], dur, t["taper"])
     except ValueError as e:
         raise ConfigError(f"{file}: [{t.where}]: {e}") from None
     if w.band[1] > PASSBAND * fs:
@@ -661,13 +644,41 @@ def _waveform(t: _Table, fs: float, file: str) -> Any:
     return w
 
 
-def _plain_name(t: _Table, key: str, name: str, what: str) -> None:
-    if not name or "/" in name or name in (".", ".."):
-        raise t.err(key, f"{name!r} must be a plain name (not empty, no '/', not '.' or "
-                    f"'..'): it names {what}")
+def _named_waveforms(t: Section, fs: float, file: str, level: float
+                     ) -> tuple[dict[str, Any], dict[str, float], list[str]]:
+    """``[active.waveforms.<name>]`` tables and ``schedule = [names…]``."""
+    for k in ("waveform", "duration", "taper", "fc", "bits", "f0", "f1"):
+        if t.has(k):
+            raise t.err(k, "give the waveform in [active] (one waveform) or in "
+                        "[active.waveforms.<name>] tables, not both")
+    raw = t["waveforms"]
+    if not raw:
+        raise t.err("waveforms", "must hold one or more [active.waveforms.<name>] tables")
+    waves, levels = {}, {}
+    for name, sub in raw.items():
+        _plain_name(t, "waveforms", name, "the replica /active/waveforms/<name>")
+        wt = Section(sub, WAVEFORM, f"{t.where}.waveforms.{name}", file)
+        waves[name] = _waveform(wt, fs, file)
+        levels[name] = wt["level_db"] if wt["level_db"] is not None else level
+    if t.has("schedule"):
+        sched = t["schedule"]
+        if (not isinstance(sched, list) or not sched
+                or not all(isinstance(x, str) for x in sched)):
+            raise t.err("schedule", f"must be a non-empty list of waveform names, got "
+                        f"{sched!r}")
+        bad = [x for x in sched if x not in waves]
+        if bad:
+            raise t.err("schedule", f"{bad[0]!r} is not a waveform (declared: "
+                        f"{', '.join(sorted(waves))})")
+    elif len(waves) == 1:
+        sched = list(waves)
+    else:
+        raise t.err("schedule", "missing: list the waveform names in transmission order, "
+                    f"e.g. schedule = {sorted(waves)!r}")
+    return waves, levels, list(sched)
 
 
-def _schedule(t: _Table, fs: float, file: str, level: float
+def _schedule(t: Section, fs: float, file: str, level: float
               ) -> tuple[dict[str, Any], dict[str, float], list[str], np.ndarray | None]:
     """Waveforms, their levels, the schedule and explicit times of the ``[active]`` table.
 
@@ -676,35 +687,7 @@ def _schedule(t: _Table, fs: float, file: str, level: float
     same keys (plus an optional ``level_db``) and ``schedule = [names…]`` cycled over the pings.
     """
     if t.has("waveforms"):
-        for k in ("waveform", "duration", "taper", "fc", "bits", "f0", "f1"):
-            if t.has(k):
-                raise t.err(k, "give the waveform in [active] (one waveform) or in "
-                            "[active.waveforms.<name>] tables, not both")
-        raw = t.raw("waveforms")
-        if not isinstance(raw, dict) or not raw:
-            raise t.err("waveforms", "must hold one or more [active.waveforms.<name>] tables")
-        waves, levels = {}, {}
-        for name, sub in raw.items():
-            wt = _Table(sub, f"{t.where}.waveforms.{name}", file)
-            _plain_name(t, "waveforms", name, "the replica /active/waveforms/<name>")
-            waves[name] = _waveform(wt, fs, file)
-            levels[name] = _level(wt, "level_db", level)
-            wt.done()
-        if t.has("schedule"):
-            sched = t.raw("schedule")
-            if (not isinstance(sched, list) or not sched
-                    or not all(isinstance(x, str) for x in sched)):
-                raise t.err("schedule", f"must be a non-empty list of waveform names, got "
-                            f"{sched!r}")
-            bad = [x for x in sched if x not in waves]
-            if bad:
-                raise t.err("schedule", f"{bad[0]!r} is not a waveform (declared: "
-                            f"{', '.join(sorted(waves))})")
-        elif len(waves) == 1:
-            sched = list(waves)
-        else:
-            raise t.err("schedule", "missing: list the waveform names in transmission order, "
-                        f"e.g. schedule = {sorted(waves)!r}")
+        waves, levels, sched = _named_waveforms(t, fs, file, level)
     else:
         if t.has("schedule"):
             raise t.err("schedule", "needs [active.waveforms.<name>] tables (the single "
@@ -717,13 +700,13 @@ def _schedule(t: _Table, fs: float, file: str, level: float
             if t.has(k):
                 raise t.err(k, "not used with explicit times (give times or "
                             "interval/first/count, not both)")
-        times = t.vec("times")
+        times = np.asarray(t["times"], float)
         if times.size == 0 or np.any(times < 0) or np.any(np.diff(times) <= 0):
             raise t.err("times", "must be a non-empty increasing list of times >= 0 s")
-    return waves, levels, list(sched), times
+    return waves, levels, sched, times
 
 
-def _check_overlap(t: _Table, spec: ActiveSpec) -> None:
+def _check_overlap(t: Section, spec: ActiveSpec) -> None:
     """A ping ends before the next one starts (several waveforms or explicit times)."""
     if spec.times is not None:
         t_next = np.diff(spec.times)
@@ -744,96 +727,99 @@ def _check_overlap(t: _Table, spec: ActiveSpec) -> None:
 MAX_REVERB_SCATTERERS = 200_000
 
 
-def _reverb(t: _Table) -> ReverbSpec:
-    """One ``[[active.reverberation]]`` table."""
-    boundary = t.str_("boundary", "bottom", choices=("bottom", "surface"))
-    depth = (t.num("depth", required=True, positive=True) if boundary == "bottom"
-             else t.num("depth", 0.0))
-    if boundary == "surface" and depth != 0.0:
-        raise t.err("depth", "the surface is at depth 0")
-    area = t.vec("area", 4, required=True)
+def _area(t: Section) -> np.ndarray:
+    """``area = [xmin, xmax, ymin, ymax]`` with min < max."""
+    area = np.asarray(t["area"], float)
     if not (area[0] < area[1] and area[2] < area[3]):
         raise t.err("area", "must be [xmin, xmax, ymin, ymax] with min < max")
-    spec = ReverbSpec(boundary, depth, t.num("scattering_strength_db", required=True),
-                      t.num("density", required=True, positive=True), area)
+    return area
+
+
+def _reverb(t: Section) -> ReverbSpec:
+    """One ``[[active.reverberation]]`` table."""
+    boundary = t["boundary"]
+    if boundary == "bottom":
+        depth = t.need("depth", "a number is required")
+        if depth <= 0:
+            raise t.err("depth", f"must be > 0, got {depth}")
+    else:
+        depth = t["depth"] if t["depth"] is not None else 0.0
+        if depth != 0.0:
+            raise t.err("depth", "the surface is at depth 0")
+    area = _area(t)
+    spec = ReverbSpec(boundary, depth, t["scattering_strength_db"], t["density"], area)
     n = spec.density * (area[1] - area[0]) * (area[3] - area[2])
     if n > MAX_REVERB_SCATTERERS:
         raise t.err("density", f"{n:.0f} scatterers over the area (at most "
                     f"{MAX_REVERB_SCATTERERS}); lower the density or the area")
-    t.done()
     return spec
 
 
-def _feature(t: _Table, i: int) -> FeatureSpec:
+def _feature(t: Section, i: int) -> FeatureSpec:
     """One ``[[active.feature]]``: ``position = [x, y]`` (a wreck) or ``line = [[x0, y0],
     [x1, y1]]`` with ``count`` points (a ridge)."""
-    name = t.str_("name", f"feature{i}")
+    name = t["name"] if t["name"] is not None else f"feature{i}"
     _plain_name(t, "name", name, "the feature's scatterers")
     if t.has("position") == t.has("line"):
         raise t.err("position", "give position = [x, y] (a point) or line = [[x0, y0], "
                     "[x1, y1]] with count (a ridge)")
     if t.has("position"):
-        pts = t.vec("position", 2).reshape(1, 2)
-        if t.has("count"):
-            raise t.err("count", "only with line")
+        pts = np.asarray(t["position"], float).reshape(1, 2)
+        _only(t, ("count",), "with line")
     else:
-        ends = t.matrix("line", 2)
+        ends = np.asarray(t["line"], float)
         if ends.shape != (2, 2):
             raise t.err("line", "must be two points [[x0, y0], [x1, y1]]")
-        n = t.int_("count", 10, minimum=1)
+        n = t["count"] if t["count"] is not None else 10
         u = np.linspace(0.0, 1.0, n) if n > 1 else np.array([0.5])
         pts = ends[0] + u[:, None] * (ends[1] - ends[0])
-    spec = FeatureSpec(name, pts, t.num("depth", required=True),
-                       t.num("ts_db", required=True))
-    t.done()
-    return spec
+    return FeatureSpec(name, pts, t["depth"], t["ts_db"])
 
 
-def _active(t: _Table, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
-    level = _level(t, "level_db", required=True)
+#: The motion keys of a target that follows its own track (not a [[source]]'s).
+_MOTION_KEYS = ("start", "course", "speed", "speed_kn", "heading", "leg")
+
+
+def _target(tt: Section, i: int, by_name: dict[str, SourceSpec]) -> TargetSpec:
+    """One ``[[active.target]]``: its own track, or a ``source``'s."""
+    name = tt["name"] if tt["name"] is not None else f"target{i}"
+    _plain_name(tt, "name", name, "the target's truth rows")
+    src = tt["source"]
+    if src is not None:
+        if src not in by_name:
+            raise tt.err("source", f"no [[source]] named {src!r}")
+        _only(tt, _MOTION_KEYS, "without source (the target follows the source's track)")
+        traj, depth = by_name[src].traj, by_name[src].depth
+        if tt["depth"] is not None:
+            depth = tt["depth"]
+    else:
+        traj, _ = _trajectory(tt)
+        depth = tt["depth"] if tt["depth"] is not None else 0.0
+    length = tt["length"]
+    nh = tt["highlights"] if tt["highlights"] is not None else (5 if length > 0 else 1)
+    return TargetSpec(name, traj, depth, tt["ts_db"], tt["distortion_ms"] * 1e-3, src,
+                      length, nh)
+
+
+def _active(t: Section, fs: float, sources: list[SourceSpec], file: str) -> ActiveSpec:
+    level = t["level_db"]
     several = t.has("waveforms") or t.has("times")
     waves, levels, sched, times = _schedule(t, fs, file, level)
-    interval = t.num("interval", required=times is None, positive=True)
-    first = t.num("first", 0.0, nonneg=True)
-    count = t.int_("count", None, minimum=1)
-    offset = t.vec("offset", 3, default=[0.0, 0.0, 0.0])
-    direct = t.bool_("direct", True)
-    targets = []
+    interval = t["interval"]
+    if times is None and interval is None:
+        raise t.err("interval", "missing (a number is required)")
     by_name = {s.name: s for s in sources}
-    for i, tt in enumerate(t.subs("target")):
-        name = tt.str_("name", f"target{i}")
-        _plain_name(tt, "name", name, "the target's truth rows")
-        src = tt.str_("source", None)
-        if src is not None:
-            if src not in by_name:
-                raise tt.err("source", f"no [[source]] named {src!r}")
-            traj, depth = by_name[src].traj, by_name[src].depth
-            if tt.has("depth"):
-                depth = tt.num("depth")
-        else:
-            traj, _ = _trajectory(tt)
-            depth = tt.num("depth", 0.0)
-        ts = tt.num("ts_db", required=True)
-        alpha = tt.num("distortion_ms", 0.0, nonneg=True) * 1e-3
-        length = tt.num("length", 0.0, nonneg=True)
-        nh = tt.int_("highlights", 5 if length > 0 else 1, minimum=1)
-        tt.done()
-        targets.append(TargetSpec(name, traj, depth, ts, alpha, src, length, nh))
+    targets = [_target(tt, i, by_name) for i, tt in enumerate(t.subs("target"))]
     clutter = None
     ct = t.sub("clutter")
     if ct is not None:
-        area = ct.vec("area", 4, required=True)
-        if not (area[0] < area[1] and area[2] < area[3]):
-            raise ct.err("area", "must be [xmin, xmax, ymin, ymax] with min < max")
-        clutter = ClutterSpec(ct.int_("count", required=True, minimum=0), area,
-                              ct.num("depth", 0.0), ct.num("ts_mean_db", -10.0),
-                              ct.num("ts_std_db", 5.0, nonneg=True))
-        ct.done()
+        clutter = ClutterSpec(ct["count"], _area(ct), ct["depth"], ct["ts_mean_db"],
+                              ct["ts_std_db"])
     reverb = [_reverb(rt) for rt in t.subs("reverberation")]
     features = [_feature(ft, i) for i, ft in enumerate(t.subs("feature"))]
-    t.done()
-    spec = ActiveSpec(waves, levels, sched, level, interval, first, count, offset, direct,
-                      targets, clutter, times, reverb, features)
+    spec = ActiveSpec(waves, levels, sched, level, interval, t["first"], t["count"],
+                      np.asarray(t["offset"], float), t["direct"], targets, clutter, times,
+                      reverb, features)
     if several:
         _check_overlap(t, spec)
     return spec
