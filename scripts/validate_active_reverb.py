@@ -30,8 +30,9 @@ ra = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(ra)
 
 
-def recording(out: Path, duration: float, reverb: dict | None) -> Path:
-    """The shipped HFM/BPSK scenario, shortened, with optional reverberation and a ridge."""
+def recording(out: Path, duration: float, reverb: dict | None, drift: float = 0.0) -> Path:
+    """The shipped HFM/BPSK scenario, shortened, with optional reverberation and a ridge, or
+    with its clutter drifting (``drift_speed_std``, m/s)."""
     from importlib.resources import files
 
     import tomllib
@@ -48,6 +49,9 @@ def recording(out: Path, duration: float, reverb: dict | None) -> Path:
                                                                 [-1000.0, -4000.0]],
                                       "count": 15, "depth": 195.0, "ts_db": 5.0}]
         name = "reverb"
+    if drift > 0:
+        base["active"]["clutter"]["drift_speed_std"] = float(drift)
+        name = f"drift{drift:g}"
     path = out / f"{name}.h5"
     if not path.exists():
         t0 = time.perf_counter()
@@ -58,10 +62,10 @@ def recording(out: Path, duration: float, reverb: dict | None) -> Path:
 
 def false_alarm_stats(res: dict) -> dict:
     """Unassociated BPSK contacts and their absolute Doppler, from the products."""
-    from arrayproc.plots._active import associate, echo_truth
-
+    from arrayproc.evaluate.association import associate
     from arrayproc.io.products import read_products
     from arrayproc.io.recording import Recording
+    from arrayproc.io.truth import echo_truth
 
     g = read_products(res["products"])["contacts"]
     with Recording(res["recording"]) as rec:
@@ -83,6 +87,10 @@ def main() -> None:
     ap.add_argument("--density", type=float, default=3e-6, help="reverberation scatterers/m²")
     ap.add_argument("--strength", type=float, default=-27.0, help="Lambert 10 log10 μ, dB")
     ap.add_argument("--beams", default="20,120,101")
+    ap.add_argument("--runs", default="ideal,reverberation,drift",
+                    help="which recordings to run (comma-separated)")
+    ap.add_argument("--drift", type=float, default=1.0,
+                    help="σ (m/s) of the drifting-clutter run (0: no such run)")
     ap.add_argument("--out", default="active_reverb_out")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
@@ -93,12 +101,25 @@ def main() -> None:
     reverb = {"boundary": "bottom", "depth": 200.0, "scattering_strength_db": args.strength,
               "density": args.density, "area": [-6000.0, 6000.0, -7000.0, 3000.0]}
     rows = {}
-    for label, rv in (("ideal", None), ("reverberation", reverb)):
-        rec = recording(out, args.duration, rv)
-        d = out / label
+    runs = [("ideal", None, 0.0), ("reverberation", reverb, 0.0)]
+    if args.drift > 0:
+        runs.append(("drift", None, args.drift))
+    runs = [r for r in runs if r[0] in args.runs.split(",")]
+    for label, rv, drift in runs:
+        rec = recording(out, args.duration, rv, drift)
+        d = out / rec.stem
         d.mkdir(exist_ok=True)
         res = ra.part_scenario(d, rec, None, 200.0, 5.0, beams=beams, blank="bpsk")
         res.update(false_alarm_stats(res))
+        if drift > 0:
+            from arrayproc.evaluate.scenarios.realism import clutter_doppler
+            res["clutter_doppler"] = clutter_doppler(res["products"], res["recording"], drift,
+                                                     range_gate=30.0, cone_gate=3.0)
+            cd = res["clutter_doppler"]
+            print(f"{label}: {cd['contacts']} clutter contacts, static (< 2 kn) "
+                  f"{cd['static_fraction']}, truth echoes {cd['truth_static_fraction']}, "
+                  f"closed form {cd['closed_form_static_fraction']:.3f}, KS "
+                  f"{cd['ks_distance']}", flush=True)
         rows[label] = res
         cl = res["clutter_loose_30m_10deg"]
         print(f"{label}: submarine detected on {res['detection_rate'] * 100:.0f} % of the "

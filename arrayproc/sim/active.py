@@ -1,5 +1,6 @@
-"""Active sonar: pings from a projector towed with the array, echoes from moving targets and
-static clutter, and the direct blast.
+"""Active sonar: pings from a projector towed with the array, echoes from moving targets,
+clutter (static, or drifting with a random velocity), bottom features, boundary reverberation,
+and the direct blast.
 
 Geometry is exact (two retarded-time legs per sample and element, see
 ``arrayproc.sim._propagate_kernels.echo_accumulate``), so an echo from a target at range rate ṙ
@@ -19,7 +20,7 @@ import numpy as np
 
 from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
 from arrayproc.sim._propagate_kernels import echo_accumulate, echo_accumulate_serial
-from arrayproc.sim.motion import BodyOffsetMover, FixedMover, TrackMover
+from arrayproc.sim.motion import BodyOffsetMover, DriftMover, FixedMover, TrackMover
 from arrayproc.sim.multipath import ImageMover, images, rough_exponent
 from arrayproc.sim.propagation import LossLaw, PoseTrack, forward_time, grid_nodes, retarded_time
 from arrayproc.sim.scenario import ActiveSpec, MultipathSpec, ReverbSpec
@@ -143,10 +144,16 @@ class ActiveSim:
             xy = np.column_stack([rng.uniform(cl.area[0], cl.area[1], cl.count),
                                   rng.uniform(cl.area[2], cl.area[3], cl.count)])
             ts = rng.normal(cl.ts_mean_db, cl.ts_std_db, cl.count)
+            # drifting clutter: a horizontal velocity N(0, σ²) per axis, drawn after the
+            # static draws (a static field is unchanged by the key's existence)
+            vel = (rng.normal(0.0, cl.drift_speed_std, (cl.count, 2))
+                   if cl.drift_speed_std > 0 else None)
             for i in range(cl.count):
-                self.scatterers.append(Scatterer(
-                    f"clutter{i}", "clutter", FixedMover([xy[i, 0], xy[i, 1], cl.depth]),
-                    cl.depth, float(ts[i])))
+                p = [xy[i, 0], xy[i, 1], cl.depth]
+                mover = (FixedMover(p) if vel is None
+                         else DriftMover(p, [vel[i, 0], vel[i, 1], 0.0]))
+                self.scatterers.append(Scatterer(f"clutter{i}", "clutter", mover, cl.depth,
+                                                 float(ts[i])))
         for ft in spec.features:
             for k, (x, y) in enumerate(ft.points):
                 self.scatterers.append(Scatterer(f"{ft.name}.{k}", "feature",

@@ -115,6 +115,21 @@ class FixedMover:
         return np.tile(self.position, (n, 1)), np.zeros((n, 3)), np.zeros((n, 3))
 
 
+class DriftMover:
+    """A point drifting at a constant velocity: x(t) = x0 + v t (drifting clutter)."""
+
+    is_static = False
+
+    def __init__(self, position: np.ndarray, velocity: np.ndarray) -> None:
+        self.position = np.asarray(position, dtype=float).reshape(3)
+        self.velocity = np.asarray(velocity, dtype=float).reshape(3)
+
+    def state3(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return (self.position + t[:, None] * self.velocity, np.tile(self.velocity, (t.size, 1)),
+                np.zeros((t.size, 3)))
+
+
 class BodyOffsetMover:
     """A point rigidly attached to the array's body frame (e.g. the projector).
 

@@ -212,6 +212,7 @@ class ClutterSpec:
     depth: float
     ts_mean_db: float
     ts_std_db: float
+    drift_speed_std: float = 0.0  # m/s per horizontal axis (0: static points)
 
 
 @dataclass
@@ -814,7 +815,7 @@ def _active(t: Section, fs: float, sources: list[SourceSpec], file: str) -> Acti
     ct = t.sub("clutter")
     if ct is not None:
         clutter = ClutterSpec(ct["count"], _area(ct), ct["depth"], ct["ts_mean_db"],
-                              ct["ts_std_db"])
+                              ct["ts_std_db"], ct["drift_speed_std"])
     reverb = [_reverb(rt) for rt in t.subs("reverberation")]
     features = [_feature(ft, i) for i, ft in enumerate(t.subs("feature"))]
     spec = ActiveSpec(waves, levels, sched, level, interval, t["first"], t["count"],

@@ -272,7 +272,12 @@ CLUTTER = Schema({
                         unit="dB"),
     "ts_std_db": Param("float", 5.0, "Std of the target strengths.", check=non_negative,
                        unit="dB"),
-}, "[active.clutter]: static point clutter")
+    "drift_speed_std": Param("float", 0.0, "Drifting clutter (fish schools, advected "
+                             "scatterers): each point moves at a constant horizontal velocity "
+                             "drawn N(0, σ²) per axis (seeded), so its radial speed is N(0, σ²) "
+                             "and its echo has its own Doppler; 0: static points.",
+                             check=non_negative, unit="m/s"),
+}, "[active.clutter]: point clutter, static or drifting")
 
 REVERB = Schema({
     "boundary": Param("str", "bottom", "The scattering boundary.",
