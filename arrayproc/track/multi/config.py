@@ -56,6 +56,11 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
                         unit="Hz²/s³"),
         "sigma_rate_hz_s": Param("float", 0.02, "initial σ of a tonal's frequency rate",
                                  check=positive, unit="Hz/s"),
+        "sigma_line_deg_hz": Param("float", 1250.0, "a line's cone-angle σ at broadside is "
+                                   "this / (f √(S/N)) (beam width ∝ wavelength, precision ∝ "
+                                   "1/√SNR)", check=positive, unit="deg·Hz"),
+        "min_sigma_line_deg": Param("float", 0.2, "floor of a line's cone-angle σ at broadside",
+                                    check=positive, unit="deg"),
         "max_tonals": Param("int", 4, "tonal slots per track",
                             check=lambda v: None if v >= 1 else "must be an integer >= 1"),
         "max_age_s": Param("float", 60.0, "a tonal not updated for this long leaves its track",

@@ -2,15 +2,16 @@
 (``measurements = "lines+bearings"`` or ``"lines"``): scans of both kinds, one track manager
 with mirrored bearing hypotheses and tonal slots (:mod:`arrayproc.track.multi.tonals`).
 
-Measurements of a scan (one snapshot time), Z (m, 4) = [cone, port bearing, starboard
-bearing, frequency] (deg, Hz):
+Measurements of a scan (one snapshot time), Z (m, 5) = [cone, port bearing, starboard
+bearing, frequency, cone σ at broadside] (deg, Hz, deg):
 
 - the broadband rows of the ``bearings`` group (the rows whose band ``freq_hi − freq_lo`` is
   the group's widest; the LOFAR-line rows of a ``bearings`` stage with ``lines = true`` repeat
   the line contacts without their frequency and are left out), merged within ``merge_deg`` as
-  in bearings mode, frequency NaN;
+  in bearings mode, frequency NaN, σ ``tracker.bearing.sigma_cone_deg``;
 - every row of the ``lines`` group (``snr_db`` at least ``tracker.lines.min_snr_db``), with its
-  ``freq_hz``.
+  ``freq_hz`` and the σ of :func:`~arrayproc.track.multi.tonals.line_sigma_deg`
+  (``tracker.lines.sigma_line_deg_hz``, ``min_sigma_line_deg``).
 
 The combined measurement table (broadband rows first, then lines) keeps each row's group
 (``kind`` 0 bearings, 1 lines) and its index in that group, written with every track point.
@@ -25,12 +26,14 @@ import numpy as np
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.io.schema import groups_of_kind
-from arrayproc.track.manage.tracks import Track
+from arrayproc.track.manage.tracks import Status, Track
 from arrayproc.track.multi.bearings import bearing_scans
 from arrayproc.track.multi.tonals import (
     TonalBank,
     TonalGNN,
     birth_tonals,
+    line_sigma_deg,
+    tonal_bearing_bank,
     tonal_slots,
     tonals_distinct,
 )
@@ -115,11 +118,18 @@ def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dic
     return out
 
 
-def line_scans(m: dict[str, np.ndarray], merge_deg: float
+def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
                ) -> list[tuple[float, np.ndarray, np.ndarray]]:
-    """Scans (t, Z (k, 4), rows of ``m``) in time order: the broadband rows of each time merged
-    within ``merge_deg`` (:func:`~arrayproc.track.multi.bearings.bearing_scans`), then every
-    line contact."""
+    """Scans (t, Z (k, 5), rows of ``m``) in time order: the broadband rows of each time merged
+    within ``tracker.bearing.merge_deg`` (:func:`~arrayproc.track.multi.bearings.
+    bearing_scans`), then every line contact (module doc)."""
+    merge_deg = float(cfg["bearing"]["merge_deg"])
+    ll = cfg["lines"]
+    sig = np.where(m["kind"] == KIND_LINES,
+                   line_sigma_deg(np.nan_to_num(m["freq_hz"], nan=1.0), m["snr_db"],
+                                  float(ll["sigma_line_deg_hz"]),
+                                  float(ll["min_sigma_line_deg"])),
+                   float(cfg["bearing"]["sigma_cone_deg"]))
     bb = np.flatnonzero(m["kind"] == KIND_BEARINGS)
     ln = np.flatnonzero(m["kind"] == KIND_LINES)
     score = np.where(np.isfinite(m["snr_db"]), m["snr_db"], -np.inf)
@@ -135,13 +145,12 @@ def line_scans(m: dict[str, np.ndarray], merge_deg: float
     for t in sorted(by_t):
         rows = np.concatenate(by_t[t]).astype(np.int64)
         Z = np.stack([m["cone_deg"][rows], m["bearing_port_deg"][rows],
-                      m["bearing_stbd_deg"][rows], m["freq_hz"][rows]], 1)
+                      m["bearing_stbd_deg"][rows], m["freq_hz"][rows], sig[rows]], 1)
         out.append((t, Z, rows))
     return out
 
 
 def _tonal_filter(cfg: dict[str, Any], nav: Nav, sound_speed: float) -> TonalBank:
-    from arrayproc.track.manage.mirrored import mirrored_bank
     from arrayproc.track.single import ownship_states
 
     b, ll = cfg["bearing"], cfg["lines"]
@@ -150,15 +159,14 @@ def _tonal_filter(cfg: dict[str, Any], nav: Nav, sound_speed: float) -> TonalBan
         own, _ = ownship_states(nav, np.asarray(t, float))
         return own[:, 2:4]
 
-    bank = mirrored_bank(float(b["q_bearing"]), float(b["sigma_cone_deg"]),
-                         float(b["min_sigma_sin"]))
+    bank = tonal_bearing_bank(float(b["q_bearing"]), float(b["min_sigma_sin"]))
     return TonalBank(bank, int(ll["max_tonals"]), float(ll["sigma_hz"]), float(ll["q_freq"]),
                      float(ll["max_age_s"]), sound_speed, own_velocity)
 
 
 def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str, Any],
                 nav: Nav, sound_speed: float = 1500.0) -> list[Track]:
-    """Run the track manager with tonal slots over line / bearing scans (Z (m, 4)).
+    """Run the track manager with tonal slots over line / bearing scans (Z (m, 5)).
 
     ``meta`` of every track: ``rows`` (row of the measurement table per history point, −1
     coasted), ``cone``, ``sigma_cone``, ``stbd_weight`` (as bearings mode), ``f_hz`` and
@@ -175,8 +183,7 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         raise ConfigError("tracker.measurements = 'lines…' associates by gnn "
                           "(tracker.association = 'gnn')")
     b, ll = cfg["bearing"], cfg["lines"]
-    s0, sr, smin = float(b["sigma_cone_deg"]), float(b["sigma_rate_deg_s"]), \
-        float(b["min_sigma_sin"])
+    sr, smin = float(b["sigma_rate_deg_s"]), float(b["min_sigma_sin"])
     filt = _tonal_filter(cfg, nav, sound_speed)
     K = filt.K
     merge = float(b["merge_deg"])
@@ -186,7 +193,7 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     def init(Z: np.ndarray, t: float, ctx: Any, j: int) -> tuple[np.ndarray, ...] | None:
         if not assoc.may_start(Z, j, t):
             return None
-        xb, Pb, lw = mirrored_initial(Z[:, :3], j, s0, smin, sr)
+        xb, Pb, lw = mirrored_initial(Z[:, :3], j, float(Z[j, 4]), smin, sr)
         x, P = filt.initial(xb, Pb, birth_tonals(Z, j, merge, K), float(ll["sigma_rate_hz_s"]))
         return x, P, lw
 
@@ -203,6 +210,7 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     mgr = TrackManager(filt, init, assoc,
                        confirm=cfg["confirm"], delete=delete)
     for k, (t, Z, _rows) in enumerate(scans):
+        assoc.confirmed = np.array([tr.status is Status.CONFIRMED for tr in mgr.live], bool)
         mgr.step(t, Z, Context(np.zeros(4), t=float(t), q_scale=float(qmul[k])))
     at = {t: (Z, r) for t, Z, r in scans}
     for tr in mgr.tracks:

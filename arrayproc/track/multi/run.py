@@ -82,6 +82,8 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     kind = cfg["measurements"]
     if kind == "bearings":
         return _bearings(prod, products_path, cfg, tma_cfg, nav)
+    if kind == "lines+bearings" and not _has_lines(prod):
+        return _bearings(prod, products_path, cfg, tma_cfg, nav)
     if kind in ("lines+bearings", "lines"):
         return _lines(prod, products_path, cfg, tma_cfg, nav)
     if kind == "contacts":
@@ -123,6 +125,25 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
     return [tr for tr in tracks if not tr.meta.get("skipped")], out
 
 
+def _has_lines(prod: dict) -> bool:
+    """Products that ``lines+bearings`` can use: a ``lines`` group beside cone-angle bearings.
+    Otherwise (no lines stage in the chain; relative-bearing beams, whose rows are resolved
+    to their side) a warning, and the bearings are tracked alone."""
+    import warnings
+
+    from arrayproc.io.schema import groups_of_kind as kinds
+
+    has = bool(kinds(prod, "lines"))
+    sided = any("side" in prod[g] for g in kinds(prod, "bearings"))
+    if has and not sided:
+        return True
+    warnings.warn("tracker.measurements = 'lines+bearings': " + (
+        "the bearings are resolved to their side (relative-bearing beams)" if sided else
+        "the products have no lines group (no lines stage in the chain)")
+        + "; tracking the bearings alone", stacklevel=3)
+    return False
+
+
 def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any],
            nav: Nav | None) -> Result:
     """Line contacts (and broadband bearings) → scans → tracks with tonal slots → one TMA per
@@ -130,7 +151,7 @@ def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[st
     from arrayproc.track.multi.lines import line_scans, line_table, track_lines
 
     m = line_table(prod, products_path, cfg, tma_cfg)
-    scans = line_scans(m, float(cfg["bearing"]["merge_deg"]))
+    scans = line_scans(m, cfg)
     tracks = track_lines(scans, cfg, nav, _sound_speed(products_path))
     out, kept = [], []
     for tr in tracks:

@@ -27,14 +27,17 @@ over the step,
 so a tonal keeps its slot through an ownship turn (the turn shifts a 400 Hz tonal by
 ≈ 0.7 Hz at 5 kn); the target's own Doppler drift is the slot's rate ḟ.
 
-Measurements Z (m, 4): [cone θ, port bearing, starboard bearing, frequency] (deg, Hz; the
-frequency NaN for a broadband bearing). Innovation of a pair: the bank's bearing innovation
-(best hypothesis) and the frequency innovation of the track's slot nearest in d²,
-ν_f = z_f − f_k, S_f = P_ff,k + σ_f². When the measurement has no frequency or the track no
-tonal, ν_f = 0 and S_f = 1/(2π) Hz², so that the pair's likelihood is its bearing likelihood
-alone (ln det 2πS_f = 0). The update feeds the bearing to the bank and the frequency to the
-matched slot; a frequency that matches no slot within the 1-dof χ² gate takes an empty slot
-(a new tonal of the track).
+Measurements Z (m, 5): [cone θ, port bearing, starboard bearing, frequency, σ_θ at broadside]
+(deg, Hz, deg; the frequency NaN for a broadband bearing). Each row carries its own cone σ
+(:func:`line_sigma_deg` for a line, whose beam widens as the wavelength), widened by
+1 / max(sin θ, s_min) towards end-fire (thesis eq. 2.9) in :func:`tonal_bearing_bank`.
+
+Innovation of a pair: the bank's bearing innovation (best hypothesis) and the frequency
+innovation of the track's slot nearest in d², ν_f = z_f − f_k, S_f = P_ff,k + σ_f². When the
+measurement has no frequency or the track no tonal, ν_f = 0 and S_f = 1/(2π) Hz², so that the
+pair's likelihood is its bearing likelihood alone (ln det 2πS_f = 0). The update feeds the
+bearing to the bank and the frequency to the matched slot; a frequency that matches no slot
+within the 1-dof χ² gate takes an empty slot (a new tonal of the track).
 
 Written here, as no tracking package (Stone Soup included) has a track of a variable set of
 tonal frequencies beside mirrored bearing hypotheses.
@@ -42,6 +45,7 @@ tonal frequencies beside mirrored bearing hypotheses.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from typing import Any
@@ -59,11 +63,54 @@ from arrayproc.track.manage.tracks import Track
 from arrayproc.track.models.bearing_frequency import BearingFrequency
 
 __all__ = ["TonalBank", "TonalGNN", "tonal_slots", "tonals_distinct", "birth_tonals",
-           "NO_FREQ_VAR"]
+           "tonal_bearing_bank", "line_sigma_deg", "NO_FREQ_VAR"]
 
 #: S_f of a pair without frequency information: ln det(2π S_f) = 0, the bearing likelihood
 NO_FREQ_VAR = 1.0 / (2.0 * math.pi)
 _NB = 4  # components of the mirrored bearing pair
+
+
+def line_sigma_deg(freq_hz: np.ndarray, snr_db: np.ndarray, k_deg_hz: float, floor_deg: float
+                   ) -> np.ndarray:
+    """Cone-angle σ (deg) at broadside of line contacts: σ = k / (f √(S/N)), floored.
+
+    A line array's bearing precision is its beam width over √SNR (the CRLB of a plane wave's
+    direction, thesis eq. 2.9 at broadside): the beam width scales as the wavelength c / f, so
+    k (deg·Hz) folds in c, the aperture and the integration. S/N = 10^(snr_db / 10) − 1
+    (``snr_db`` is the line over its TPSW background, (S + N) / N).
+
+    Parameters
+    ----------
+    freq_hz, snr_db : ndarray
+        The lines' frequencies (Hz) and SNR (dB).
+    k_deg_hz : float
+        k, deg·Hz.
+    floor_deg : float
+        Smallest σ, deg.
+    """
+    sn = np.maximum(10.0 ** (np.asarray(snr_db, float) / 10.0) - 1.0, 1e-3)
+    return np.maximum(k_deg_hz / (np.asarray(freq_hz, float) * np.sqrt(sn)), floor_deg)
+
+
+def tonal_bearing_bank(q: float, min_sin: float = 0.2) -> StackedBank:
+    """The mirrored bearing hypotheses of :func:`~arrayproc.track.manage.mirrored.mirrored_bank`
+    on measurements Z (m, 5) that carry their own broadside σ (column 4): hypothesis 0 reads
+    the starboard bearing, 1 the port bearing, R = (σ / max(sin θ, s_min))²."""
+    from arrayproc.track.filters.stacked import StackedEKF
+    from arrayproc.track.manage.mirrored import LOG_FLOOR
+    from arrayproc.track.models.motion import ConstantVelocity
+    from arrayproc.track.models.position import BearingDeg
+
+    def members(Z: np.ndarray) -> np.ndarray:
+        return np.asarray(Z, float)[:, [2, 1]][:, :, None]
+
+    def noise(Z: np.ndarray) -> np.ndarray:
+        Z = np.asarray(Z, float)
+        s = Z[:, 4] / np.maximum(np.sin(np.deg2rad(Z[:, 0])), min_sin)
+        return (s * s)[:, None, None]
+
+    return StackedBank(StackedEKF(ConstantVelocity(q1=float(q), axes=1), BearingDeg()), 2,
+                       members, noise, floor=LOG_FLOOR)
 
 
 def tonal_slots(x: np.ndarray, n_tonals: int) -> tuple[np.ndarray, np.ndarray]:
@@ -79,7 +126,7 @@ class TonalBank:
     Parameters
     ----------
     bank : StackedBank
-        The mirrored bearing bank (:func:`~arrayproc.track.manage.mirrored.mirrored_bank`).
+        The mirrored bearing bank (:func:`tonal_bearing_bank`).
     n_tonals : int
         Slots K per track.
     sigma_hz : float
@@ -215,9 +262,9 @@ class TonalBank:
     def innovation(self, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any = None,
                    W: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """ν (n, m, 2) [bearing deg, frequency Hz] and S (n, m, 2, 2) of every pair."""
-        Z = np.asarray(Z, float).reshape(-1, 4)
-        nb, Sb = self.bank.innovation(X[:, :_NB], np.ascontiguousarray(P[:, :_NB, :_NB]),
-                                      np.ascontiguousarray(Z[:, :3]), ctx, W)
+        Z = np.asarray(Z, float).reshape(-1, 5)
+        nb, Sb = self.bank.innovation(X[:, :_NB], np.ascontiguousarray(P[:, :_NB, :_NB]), Z,
+                                      ctx, W)
         _k, nu_f, S_f = self._freq_match(X, P, Z[:, 3])
         nu = np.concatenate([nb, nu_f[..., None]], -1)
         S = np.zeros(nu.shape + (2,))
@@ -231,11 +278,11 @@ class TonalBank:
         """Tracks X (a, d) updated with ``Z[idx]``: the bank with the bearings, the matched
         slot with the frequency (Kalman gain on [f, ḟ] with H = [1, 0]) or an empty slot
         when none matches. Returns X, P, the bearing mixture log-likelihood and W."""
-        Z = np.asarray(Z, float).reshape(-1, 4)
+        Z = np.asarray(Z, float).reshape(-1, 5)
         idx = np.asarray(idx, np.int64)
         X, P = np.array(X, float), np.array(P, float)
         Xb, Pb, tot, Wn = self.bank.update(X[:, :_NB], np.ascontiguousarray(P[:, :_NB, :_NB]),
-                                           np.ascontiguousarray(Z[:, :3]), ctx, idx, W)
+                                           Z, ctx, idx, W)
         X[:, :_NB], P[:, :_NB, :_NB] = Xb, Pb
         fz = Z[idx, 3]
         k, nu_f, S_f = self._freq_match(X, P, fz)
@@ -282,21 +329,40 @@ def tonals_distinct(n_tonals: int, gate_hz: float) -> Callable[[Track, Track], b
     return distinct
 
 
+@dataclasses.dataclass
+class _Scan:
+    """One scan's association in progress (states updated in place)."""
+
+    filt: TonalBank
+    X: np.ndarray
+    P: np.ndarray
+    Z: np.ndarray
+    ctx: Any
+    W: np.ndarray | None
+    hit: np.ndarray
+    meas: np.ndarray
+    used: np.ndarray
+    in_gate: np.ndarray
+
+
 class TonalGNN:
     """Global nearest neighbour on bearing and frequency together (:func:`~arrayproc.track.
     manage.associate.gnn` on d² = ν_β²/S_β + ν_f²/S_f, χ² gate of 2 dof) between the tracks
     and the scan's lines, then GNN on bearing (1 dof) between the tracks and the scan's
-    broadband rows: a track takes at most one line and one broadband row per scan (its source's
-    tonal and broadband peak, two measurements of its bearing), so that the broadband peak of
-    a source whose track took its line does not feed another track.
+    broadband rows, the confirmed tracks first (tier 1), then the tentative ones on what is
+    left (tier 2: a young track does not take a line from an established one). A track takes
+    at most one line and one broadband row per scan (its source's tonal and broadband peak,
+    two measurements of its bearing), so that the broadband peak of a source whose track took
+    its line does not feed another track.
 
     A line left unassigned that lies in the bearing gate of exactly one track updates the tonal
     of that track it matches (frequency only), or, when it matches none and lies within
     d² ≤ ``adopt_d2`` of the track's bearing, joins the track as a new tonal: a source's
     several lines feed one track instead of starting one each. Of the measurements left for
     the initiator, those of one scan within ``merge_deg`` of each other in cone angle (a
-    source's broadband peak and its lines) start one track: the first line among them (the initiator takes the others' frequencies as its tonals,
-    :func:`birth_tonals`), or the broadband row when none is a line.
+    source's broadband peak and its lines) start one track: the first line among them (the
+    initiator takes the others' frequencies as its tonals, :func:`birth_tonals`), or the
+    broadband row when none is a line.
 
     Parameters
     ----------
@@ -316,59 +382,76 @@ class TonalGNN:
         self._g2 = gate_threshold(self.gate_prob, 2)
         self._g1 = gate_threshold(self.gate_prob, 1)
 
+    #: confirmed flags (n,) of the live tracks of the coming scan, in the manager's order
+    #: (set by the caller before each step; None: one tier)
+    confirmed: np.ndarray | None = None
+
     def __call__(self, filt: TonalBank, X: np.ndarray, P: np.ndarray, Z: np.ndarray, ctx: Any,
                  W: np.ndarray | None = None) -> Association:
         n, m = X.shape[0], Z.shape[0]
         hit, meas, used = np.zeros(n, bool), np.full(n, -1, np.int64), np.zeros(m, bool)
         in_gate = np.zeros(m, bool)
         is_line = np.isfinite(Z[:, 3])
-        for cols, gate in ((np.flatnonzero(is_line), self._g2),
-                           (np.flatnonzero(~is_line), self._g1)):
-            if cols.size == 0:
+        conf = self.confirmed if self.confirmed is not None and self.confirmed.size == n \
+            else np.ones(n, bool)
+        st = _Scan(filt, X, P, Z, ctx, W, hit, meas, used, in_gate)
+        for tier in (np.flatnonzero(conf), np.flatnonzero(~conf)):
+            if tier.size == 0:
                 continue
-            Zs = np.ascontiguousarray(Z[cols])
-            nu, S = filt.innovation(X, P, Zs, ctx, W)
-            d2, logdet = mahalanobis(nu, S)
-            in_gate[cols] |= (d2 <= gate).any(0)
-            pairs = gnn(d2, logdet, gate)
-            if not pairs:
-                continue
-            ii = np.array([p[0] for p in pairs])
-            jj = np.array([p[1] for p in pairs])
-            Xu, Pu, _tot, Wu = filt.update(X[ii], P[ii], Zs, ctx, jj,
-                                           None if W is None else W[ii])
-            X[ii], P[ii] = Xu, Pu
-            if W is not None:
-                W[ii] = Wu
-            meas[ii] = np.where(hit[ii], meas[ii], cols[jj])  # the line when it had one
-            hit[ii] = True
-            used[cols[jj]] = True
-        self._other_lines(filt, X, P, Z, ctx, W, used, in_gate)
+            self._assign(st, tier, is_line, self._g2)
+            self._other_lines(st, tier)
+            self._assign(st, tier, ~is_line, self._g1)
         self._births = (getattr(ctx, "t", None), Z, self.births(Z, used | in_gate))
-        return Association(X, P, W, hit, meas, in_gate, used)
+        return Association(st.X, st.P, st.W, hit, meas, in_gate, used)
 
-    def _other_lines(self, filt: TonalBank, X: np.ndarray, P: np.ndarray, Z: np.ndarray,
-                     ctx: Any, W: np.ndarray | None, used: np.ndarray, in_gate: np.ndarray
-                     ) -> None:
-        """Unassigned lines in the bearing gate of exactly one track: its matching tonal
-        updated (frequency only), or a new tonal within ``adopt_d2`` (class doc)."""
-        cols = np.flatnonzero(~used & np.isfinite(Z[:, 3]))
-        if cols.size == 0 or X.shape[0] == 0:
+    @staticmethod
+    def _assign(st: _Scan, tier: np.ndarray, kind: np.ndarray, gate: float) -> None:
+        """GNN of the tracks ``tier`` with the scan's unused measurements of one ``kind``,
+        then their update."""
+        cols = np.flatnonzero(kind & ~st.used)
+        Zs = np.ascontiguousarray(st.Z[cols])
+        Wt = None if st.W is None else st.W[tier]
+        nu, S = st.filt.innovation(st.X[tier], st.P[tier], Zs, st.ctx, Wt)
+        d2, logdet = mahalanobis(nu, S)
+        st.in_gate[cols] |= (d2 <= gate).any(0)
+        pairs = gnn(d2, logdet, gate) if cols.size else []
+        if not pairs:
             return
-        nu, S = filt.innovation(X, P, np.ascontiguousarray(Z[cols]), ctx, W)
+        ii = tier[np.array([p[0] for p in pairs])]
+        jj = np.array([p[1] for p in pairs])
+        Xu, Pu, _tot, Wu = st.filt.update(st.X[ii], st.P[ii], Zs, st.ctx, jj,
+                                          None if st.W is None else st.W[ii])
+        st.X[ii], st.P[ii] = Xu, Pu
+        if st.W is not None:
+            st.W[ii] = Wu
+        st.meas[ii] = np.where(st.hit[ii], st.meas[ii], cols[jj])  # the line when it had one
+        st.hit[ii] = True
+        st.used[cols[jj]] = True
+
+    def _other_lines(self, st: _Scan, tier: np.ndarray) -> None:
+        """Unassigned lines in the bearing gate of exactly one track of ``tier``: its matching
+        tonal updated (frequency only), or a new tonal within ``adopt_d2`` (class doc)."""
+        Z = st.Z
+        cols = np.flatnonzero(~st.used & np.isfinite(Z[:, 3]))
+        if cols.size == 0:
+            return
+        Wt = None if st.W is None else st.W[tier]
+        nu, S = st.filt.innovation(st.X[tier], st.P[tier], np.ascontiguousarray(Z[cols]),
+                                   st.ctx, Wt)
         d2b = nu[..., 0] ** 2 / S[..., 0, 0]                        # bearing only (n, c)
         for c, j in enumerate(cols):
             near = np.flatnonzero(d2b[:, c] <= self._g1)
             if near.size != 1:
                 continue
-            i = int(near[0])
-            k, nf, sf = filt._freq_match(X[i:i + 1], P[i:i + 1], Z[j:j + 1, 3])
+            i = int(tier[near[0]])
+            k, nf, sf = st.filt._freq_match(st.X[i:i + 1], st.P[i:i + 1], Z[j:j + 1, 3])
             if k[0, 0] >= 0 and nf[0, 0] ** 2 / sf[0, 0] <= self._g1:
-                filt.update_slot(X[i], P[i], int(k[0, 0]), float(Z[j, 3]))
-                used[j] = in_gate[j] = True
-            elif d2b[i, c] <= self.adopt_d2:
-                filt.adopt(X[i], P[i], float(Z[j, 3]))
-                used[j] = in_gate[j] = True
+                st.filt.update_slot(st.X[i], st.P[i], int(k[0, 0]), float(Z[j, 3]))
+            elif d2b[near[0], c] <= self.adopt_d2:
+                st.filt.adopt(st.X[i], st.P[i], float(Z[j, 3]))
+            else:
+                continue
+            st.used[j] = st.in_gate[j] = True
 
     def births(self, Z: np.ndarray, taken: np.ndarray) -> np.ndarray:
         """Measurements of scan Z that may start a track: of each cluster of free ones (not
@@ -393,7 +476,7 @@ class TonalGNN:
 
 
 def birth_tonals(Z: np.ndarray, j: int, merge_deg: float, n_tonals: int) -> np.ndarray:
-    """Frequencies (Hz) a track born from measurement j of scan Z (m, 4) starts with: its own
+    """Frequencies (Hz) a track born from measurement j of scan Z (m, 5) starts with: its own
     and those of the scan's other lines within ``merge_deg`` of it in cone angle (the cluster
     of :class:`TonalGNN`), distinct, at most ``n_tonals``."""
     near = np.abs(Z[:, 0] - Z[j, 0]) <= merge_deg

@@ -14,7 +14,7 @@ import pytest
 from arrayproc.geo.nav import Nav
 from arrayproc.track.multi.config import split_config
 from arrayproc.track.multi.lines import KIND_BEARINGS, KIND_LINES, line_scans, track_lines
-from arrayproc.track.multi.tonals import NO_FREQ_VAR, TonalBank
+from arrayproc.track.multi.tonals import NO_FREQ_VAR, TonalBank, tonal_bearing_bank
 from arrayproc.track.state import Context
 
 DATA = os.path.join(os.path.dirname(__file__), "..", "..", "..", "arrayproc", "data",
@@ -83,8 +83,7 @@ def _run(sources, seed, duration=600.0, **kw):
     times = np.arange(0.0, duration, 2.0)
     m, label = _table(sources, times, seed, **kw)
     cfg = _cfg()
-    tracks = track_lines(line_scans(m, float(cfg["bearing"]["merge_deg"])), cfg,
-                         _nav(duration))
+    tracks = track_lines(line_scans(m, cfg), cfg, _nav(duration))
     return tracks, m, label
 
 
@@ -138,12 +137,10 @@ def test_tonal_follows_the_doppler_of_an_ownship_turn():
     """Ownship Doppler (module doc of track.multi.tonals): a source dead ahead, the ownship
     going from 0 to 5 m/s towards it, the frequency rises by f v / c = 0.5 Hz; the slot's
     prediction alone (no measurement) follows it."""
-    from arrayproc.track.manage.mirrored import mirrored_bank
-
     def vel(t):
         return np.stack([np.zeros_like(t), np.clip(np.asarray(t), 0, 10) * 0.5], 1)
 
-    filt = TonalBank(mirrored_bank(0.002, 0.7), 2, 0.1, 1e-12, 1e9, C, vel)
+    filt = TonalBank(tonal_bearing_bank(0.002), 2, 0.1, 1e-12, 1e9, C, vel)
     x, P = filt.initial(np.array([0.0, 0.0, 0.0, 0.0]), np.eye(4), 150.0, 1e-6)
     X, _ = filt.predict(x[None], P[None], np.array([10.0]), Context(np.zeros(4), t=10.0))
     assert X[0, 4] == pytest.approx(150.0 * (1 + 5.0 / C), rel=1e-9)
@@ -154,14 +151,14 @@ def test_frequency_gate_rejects_a_wrong_tonal():
     151.5 Hz (10 σ) is not; a broadband row (no frequency) is, with the bearing's
     likelihood alone (S_f = 1/(2π))."""
     from arrayproc.track.manage.associate import gate_threshold, mahalanobis
-    from arrayproc.track.manage.mirrored import mirrored_bank, mirrored_initial
+    from arrayproc.track.manage.mirrored import mirrored_initial
 
-    filt = TonalBank(mirrored_bank(0.002, 0.7), 3, 0.15, 1e-4, 60.0)
-    Z0 = np.array([[60.0, 300.0, 60.0, 150.0]])
+    filt = TonalBank(tonal_bearing_bank(0.002), 3, 0.15, 1e-4, 60.0)
+    Z0 = np.array([[60.0, 300.0, 60.0, 150.0, 0.7]])
     xb, Pb, lw = mirrored_initial(Z0, 0, 0.7, 0.2, 0.5)
     x, P = filt.initial(xb, Pb, 150.0, 0.02)
-    Z = np.array([[60.2, 299.8, 60.2, 150.1], [60.2, 299.8, 60.2, 151.5],
-                  [60.2, 299.8, 60.2, np.nan]])
+    Z = np.array([[60.2, 299.8, 60.2, 150.1, 0.7], [60.2, 299.8, 60.2, 151.5, 0.7],
+                  [60.2, 299.8, 60.2, np.nan, 0.7]])
     nu, S = filt.innovation(x[None], P[None], Z, None, lw[None])
     d2, _ = mahalanobis(nu, S)
     g = gate_threshold(0.999, 2)
