@@ -121,8 +121,9 @@ def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dic
 def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
                ) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """Scans (t, Z (k, 5), rows of ``m``) in time order: the broadband rows of each time merged
-    within ``tracker.bearing.merge_deg`` (:func:`~arrayproc.track.multi.bearings.
-    bearing_scans`), then every line contact (module doc)."""
+    within ``tracker.bearing.merge_deg``
+    (:func:`~arrayproc.track.multi.bearings.bearing_scans`), then every line contact (module
+    doc)."""
     merge_deg = float(cfg["bearing"]["merge_deg"])
     ll = cfg["lines"]
     sig = np.where(m["kind"] == KIND_LINES,

@@ -346,8 +346,9 @@ class _Scan:
 
 
 class TonalGNN:
-    """Global nearest neighbour on bearing and frequency together (:func:`~arrayproc.track.
-    manage.associate.gnn` on d² = ν_β²/S_β + ν_f²/S_f, χ² gate of 2 dof) between the tracks
+    """Global nearest neighbour on bearing and frequency together
+    (:func:`~arrayproc.track.manage.associate.gnn` on d² = ν_β²/S_β + ν_f²/S_f, χ² gate of
+    2 dof) between the tracks
     and the scan's lines, then GNN on bearing (1 dof) between the tracks and the scan's
     broadband rows, the confirmed tracks first (tier 1), then the tentative ones on what is
     left (tier 2: a young track does not take a line from an established one). A track takes
