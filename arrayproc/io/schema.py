@@ -229,6 +229,16 @@ _KINDS = [
                   False),
         "z": _c("m", "depth (positions tracks)", False),
         "vz": _c("m/s", "depth rate (positions tracks)", False),
+        # lines+bearings tracks (track/multi/lines.py): the measurement of each point
+        "row_kind": _c("", "group of row: 0 bearings, 1 lines, -1 coasted", False, "i1"),
+        "meas_cone_deg": _c("deg", "cone angle of the measurement used (NaN coasted)", False),
+        "meas_port_deg": _c("deg", "its port bearing", False),
+        "meas_stbd_deg": _c("deg", "its starboard bearing", False),
+        "meas_freq_hz": _c("Hz", "its frequency (NaN broadband or coasted)", False),
+        "meas_tonal": _c("", "tonal slot its frequency updated (-1 none)", False, "i8"),
+        "f_hz": _c("Hz", "received frequency of each tonal slot of the track, (n, K); NaN "
+                   "empty", False, trailing=_ANY),
+        "sigma_f_hz": _c("Hz", "1-sigma of f_hz, (n, K)", False, trailing=_ANY),
     }),
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),

@@ -10,6 +10,7 @@ deleting the younger one.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +41,9 @@ class DeletionRule:
     window, min_hits : int
         Delete a confirmed track with fewer than ``min_hits`` hits in its last ``window``
         scans (a false track fed by sporadic clutter); ``window`` None disables the test.
+    distinct : callable or None
+        ``distinct(a, b)`` True when tracks a and b hold different targets whatever their
+        distance (e.g. disjoint tonal frequencies): such a pair is never a duplicate.
     """
 
     max_misses: int = 5
@@ -50,6 +54,7 @@ class DeletionRule:
     merge_scans: int = 3
     window: int | None = None
     min_hits: int = 0
+    distinct: Callable[[Track, Track], bool] | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_misses, int) and self.max_misses >= 1):
@@ -94,6 +99,8 @@ class DeletionRule:
         for a in range(len(live)):
             for b in range(a + 1, len(live)):
                 ta, tb = live[a], live[b]
+                if self.distinct is not None and self.distinct(ta, tb):
+                    continue
                 d = ta.x[idx] - tb.x[idx]
                 S = ta.P[np.ix_(idx, idx)] + tb.P[np.ix_(idx, idx)]
                 if float(d @ np.linalg.solve(S, d)) < self.merge_d2:

@@ -13,6 +13,13 @@ Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManage
   then drive a TMA filter — by default the UKF with left-right resolution (L-R paper
   eqs. (9)-(13)), any filter of ``FILTERS`` by ``filter`` — from the same ``[tracker]`` keys as
   single mode.
+- ``lines+bearings`` (towed line array, the default of ``multi_target.toml``) and ``lines``:
+  the line contacts of a ``lines`` group (with their frequency) and the broadband rows of the
+  ``bearings`` group; each track carries the mirrored bearing hypotheses and the received
+  frequencies of its tonals (:mod:`arrayproc.track.multi.tonals`, ownship Doppler through
+  :mod:`arrayproc.track.models.bearing_frequency`), association on bearing and frequency
+  together (:mod:`arrayproc.track.multi.lines`); the TMA of each track as for bearings, and
+  the tracks rows carry each point's measurement and the track's ``f_hz``.
 - ``contacts`` (active): Cartesian CV tracks, EKF with the bearing-range-range-rate model
   (:mod:`arrayproc.track.models.bearing_range_rate`). A line array's contact has two
   candidate bearings (port, starboard); both enter as measurements (``mirror = true``), so a
@@ -22,7 +29,7 @@ Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManage
 Config (``[tracker]`` keys beside those of single mode)::
 
     type = "multi"                # (older form: mode = "multi")
-    measurements = "bearings"     # bearings | contacts | positions
+    measurements = "bearings"     # bearings | lines+bearings | lines | contacts | positions
     association = "gnn"           # gnn | jpda
     gate_prob = 0.999             # P_G
     confirm = [3, 5]              # M of N
@@ -39,6 +46,16 @@ Config (``[tracker]`` keys beside those of single mode)::
     merge_deg = 4.0
     sigma_rate_deg_s = 0.5        # initial cone-rate σ
     merge_d2 = 4.0                # duplicate confirmed tracks (d² of the cone states)
+    [tracker.lines]               # lines+bearings | lines (beside [tracker.bearing])
+    sigma_hz = 0.15               # a line's frequency σ
+    sigma_line_deg_hz = 1250.0    # a line's cone σ at broadside: this / (f √(S/N)), deg
+    min_sigma_line_deg = 0.2
+    q_freq = 1e-4                 # Hz²/s³
+    sigma_rate_hz_s = 0.02
+    max_tonals = 4
+    max_age_s = 60.0
+    adopt_d2 = 1.0
+    min_snr_db = 0.0
     [tracker.contacts]
     sigma_bearing_deg = 2.0
     sigma_range_m = 20.0
@@ -63,11 +80,14 @@ from arrayproc.track.multi.config import (
     tracker_mode,
 )
 from arrayproc.track.multi.contacts import contact_scans, contacts_manager, drop_twin_births
+from arrayproc.track.multi.lines import line_scans, line_table, track_lines
 from arrayproc.track.multi.positions import positions_manager
 from arrayproc.track.multi.run import confirmed_status, multi_target, run_multi
 from arrayproc.track.multi.tma import resolved_side, tma_track
+from arrayproc.track.multi.tonals import TonalBank, TonalGNN
 
 __all__ = ["run_multi", "tracker_mode", "split_config", "check_multi_config", "multi_target",
            "bearing_scans", "cone_filter", "track_cones", "tma_track", "resolved_side",
            "contact_scans", "contacts_manager", "drop_twin_births", "positions_manager",
-           "confirmed_status", "compose_manager", "MULTI_KEYS", "SUB_PARAMS"]
+           "confirmed_status", "compose_manager", "MULTI_KEYS", "SUB_PARAMS",
+           "line_table", "line_scans", "track_lines", "TonalBank", "TonalGNN"]

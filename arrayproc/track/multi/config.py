@@ -16,7 +16,7 @@ __all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_mu
 
 MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
               "hit_window",
-              "pd", "clutter_density", "bearing", "contacts", "positions"}
+              "pd", "clutter_density", "bearing", "contacts", "positions", "lines"}
 
 
 def _f(default: float, doc: str) -> Param:
@@ -47,6 +47,28 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
         "moving_only": Param("bool", False, "only contacts flagged moving enter"),
         "min_snr_db": Param("float", 0.0, "only contacts with snr_db at least this (> 0) enter",
                             check=positive),
+    },
+    "lines": {
+        "sigma_hz": Param("float", 0.15, "σ of a line contact's frequency", check=positive,
+                          unit="Hz"),
+        "q_freq": Param("float", 1e-4, "frequency-acceleration noise of a tonal (times the "
+                        "turn factor of tracker.bearing.turn_ref_deg_s)", check=positive,
+                        unit="Hz²/s³"),
+        "sigma_rate_hz_s": Param("float", 0.02, "initial σ of a tonal's frequency rate",
+                                 check=positive, unit="Hz/s"),
+        "sigma_line_deg_hz": Param("float", 1250.0, "a line's cone-angle σ at broadside is "
+                                   "this / (f √(S/N)) (beam width ∝ wavelength, precision ∝ "
+                                   "1/√SNR)", check=positive, unit="deg·Hz"),
+        "min_sigma_line_deg": Param("float", 0.2, "floor of a line's cone-angle σ at broadside",
+                                    check=positive, unit="deg"),
+        "max_tonals": Param("int", 4, "tonal slots per track",
+                            check=lambda v: None if v >= 1 else "must be an integer >= 1"),
+        "max_age_s": Param("float", 60.0, "a tonal not updated for this long leaves its track",
+                           check=positive, unit="s"),
+        "adopt_d2": Param("float", 1.0, "bearing d² under which an unassigned line joins the "
+                          "only track near it as a new tonal", check=positive),
+        "min_snr_db": Param("float", 0.0, "only lines with snr_db at least this (> 0) enter",
+                            check=positive, unit="dB"),
     },
     "positions": {
         "q": _f(0.01, "acceleration noise, m²/s³"),
@@ -92,7 +114,8 @@ def _prob(strict_top: bool) -> Any:
 #: the track manager's ``[tracker]`` keys (beside the TMA filter's and the sub-tables)
 MANAGER_PARAMS = Schema({
     "measurements": Param("str", "bearings", "what the tracks are made of",
-                          choices=("bearings", "contacts", "positions")),
+                          choices=("bearings", "lines+bearings", "lines", "contacts",
+                                   "positions")),
     "association": Param("str", "gnn", "global nearest neighbour or joint probabilistic data "
                          "association", choices=("gnn", "jpda")),
     "gate_prob": Param("float", 0.999, "P_G of the χ² gate", check=_prob(True)),

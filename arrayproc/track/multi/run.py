@@ -82,6 +82,10 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     kind = cfg["measurements"]
     if kind == "bearings":
         return _bearings(prod, products_path, cfg, tma_cfg, nav)
+    if kind == "lines+bearings" and not _has_lines(prod):
+        return _bearings(prod, products_path, cfg, tma_cfg, nav)
+    if kind in ("lines+bearings", "lines"):
+        return _lines(prod, products_path, cfg, tma_cfg, nav)
     if kind == "contacts":
         return _contacts(prod, products_path, cfg, nav)
     return _positions(prod, products_path, cfg, nav)
@@ -119,6 +123,74 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
         else:
             tr.meta["skipped"] = True
     return [tr for tr in tracks if not tr.meta.get("skipped")], out
+
+
+def _has_lines(prod: dict) -> bool:
+    """Products that ``lines+bearings`` can use: a ``lines`` group beside cone-angle bearings.
+    Otherwise (no lines stage in the chain; relative-bearing beams, whose rows are resolved
+    to their side) a warning, and the bearings are tracked alone."""
+    import warnings
+
+    from arrayproc.io.schema import groups_of_kind as kinds
+
+    has = bool(kinds(prod, "lines"))
+    sided = any("side" in prod[g] for g in kinds(prod, "bearings"))
+    if has and not sided:
+        return True
+    warnings.warn("tracker.measurements = 'lines+bearings': " + (
+        "the bearings are resolved to their side (relative-bearing beams)" if sided else
+        "the products have no lines group (no lines stage in the chain)")
+        + "; tracking the bearings alone", stacklevel=3)
+    return False
+
+
+def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any],
+           nav: Nav | None) -> Result:
+    """Line contacts (and broadband bearings) → scans → tracks with tonal slots → one TMA per
+    track, each point with its measurement (:func:`_measurement_columns`)."""
+    from arrayproc.track.multi.lines import line_scans, line_table, track_lines
+
+    m = line_table(prod, products_path, cfg, tma_cfg)
+    scans = line_scans(m, cfg)
+    tracks = track_lines(scans, cfg, nav, _sound_speed(products_path))
+    out, kept = [], []
+    for tr in tracks:
+        rows = tma_track(tr, m, nav, tma_cfg, by_side=True)
+        if rows is None:
+            continue
+        out.append(_measurement_columns(tr, m, rows))
+        kept.append(tr)
+    return kept, out
+
+
+def _measurement_columns(tr: Track, m: dict[str, np.ndarray], rows: dict[str, np.ndarray]
+                         ) -> dict[str, np.ndarray]:
+    """The TMA rows of a tonal track with its tonals and, per point, the measurement that
+    updated it: ``row`` (index in its products group), ``row_kind`` (0 bearings, 1 lines, −1
+    coasted), ``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``, ``meas_freq_hz`` (NaN
+    broadband or coasted), ``meas_tonal`` (its slot), ``f_hz`` / ``sigma_f_hz`` (n, K) the
+    track's tonals (NaN: empty slot)."""
+    n_all = tr.meta["rows"].size
+    keep = np.zeros(n_all, bool)
+    keep[n_all - rows["time"].size:] = True  # tma_track drops the points before its first row
+    r = tr.meta["rows"][keep]
+    on = r >= 0
+    rs = np.where(on, r, 0)
+
+    def pick(col: str) -> np.ndarray:
+        return np.where(on, m[col][rs], np.nan)
+
+    out = dict(rows)
+    out["row"] = np.where(on, m["row"][rs], -1).astype(np.int64)
+    out["row_kind"] = np.where(on, m["kind"][rs], -1).astype(np.int8)
+    out["meas_cone_deg"] = pick("cone_deg")
+    out["meas_port_deg"] = pick("bearing_port_deg")
+    out["meas_stbd_deg"] = pick("bearing_stbd_deg")
+    out["meas_freq_hz"] = pick("freq_hz")
+    out["meas_tonal"] = np.where(on, tr.meta["meas_tonal"][keep], -1).astype(np.int64)
+    out["f_hz"] = tr.meta["f_hz"][keep]
+    out["sigma_f_hz"] = tr.meta["sigma_f_hz"][keep]
+    return out
 
 
 def _contacts(prod: dict, products_path: str, cfg: dict[str, Any], nav: Nav | None) -> Result:

@@ -1,0 +1,1 @@
+"""Tests of the multi-target tracker package (track/multi)."""
