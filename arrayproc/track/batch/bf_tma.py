@@ -42,50 +42,70 @@ from .bo_tma import (
 )
 from .evolution import evolve
 from .fim import bo_jacobian
+from .motion import emission_derivative, emission_points
 from .result import PolarSearch, TmaSolution, end_value, finish_solution
 
 __all__ = ["doppler_factor", "range_rate_gradient", "noise_scale", "solve_bearings_frequency"]
 
 
+def _emission(x: np.ndarray, tau: np.ndarray, obs: np.ndarray, retarded_c: float | None
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Source positions the rows see (B, 2) and their times since t0 (B,): at the reception
+    times, or at the emission times with a sound speed (eq. (M5) of :mod:`.motion`)."""
+    tau = np.asarray(tau, float)
+    if retarded_c:
+        return emission_points(x[:4], tau, obs, retarded_c)
+    return x[None, :2] + tau[:, None] * x[None, 2:4], tau
+
+
 def doppler_factor(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-                   sound_speed: float) -> np.ndarray:
+                   sound_speed: float, retarded: bool = False) -> np.ndarray:
     """``g_b = 1 − ṙ_b / c`` of eq. (BF1) for the kinematic state ``[x, y, ẋ, ẏ]`` at the
-    window start (m, m/s); ``tau`` (B,) s; ``obs``, ``obs_vel`` (B, 2) m and m/s."""
+    window start (m, m/s); ``tau`` (B,) s; ``obs``, ``obs_vel`` (B, 2) m and m/s;
+    ``retarded``: ``d`` from the source's emission point (eq. (M5) of :mod:`.motion`)."""
     x = np.asarray(state, float)
-    d = x[None, :2] + np.asarray(tau)[:, None] * x[None, 2:4] - obs
+    p, _ = _emission(x, tau, obs, sound_speed if retarded else None)
+    d = p - obs
     u = x[None, 2:4] - obs_vel
     return 1.0 - np.sum(d * u, axis=1) / np.hypot(d[:, 0], d[:, 1]) / sound_speed
 
 
 def range_rate_gradient(state: np.ndarray, tau: np.ndarray, obs: np.ndarray,
-                        obs_vel: np.ndarray) -> np.ndarray:
+                        obs_vel: np.ndarray, retarded_c: float | None = None) -> np.ndarray:
     """``∂ṙ_b/∂[x, y, ẋ, ẏ]`` (B, 4): with ``d = p + τ v − o``, ``u = v − v_o``, ``r = |d|``,
-    ``∂ṙ/∂p = u/r − (d·u) d / r³`` and ``∂ṙ/∂v = τ ∂ṙ/∂p + d/r``."""
+    ``∂ṙ/∂p = u/r − (d·u) d / r³`` and ``∂ṙ/∂v = τ ∂ṙ/∂p + d/r``; with ``retarded_c`` the
+    emission point ``p_e`` (τ_e its time) in place of ``p + τ v``, ``∂ṙ/∂p0 = ∂ṙ/∂p_e M⁻¹``
+    and ``∂ṙ/∂v = τ_e ∂ṙ/∂p_e M⁻¹ + d/r`` (:func:`.motion.emission_derivative`)."""
     x = np.asarray(state, float)
-    tau = np.asarray(tau, float)
-    d = x[None, :2] + tau[:, None] * x[None, 2:4] - obs
+    p, tau_e = _emission(x, tau, obs, retarded_c)
+    d = p - obs
     u = x[None, 2:4] - obs_vel
     r = np.hypot(d[:, 0], d[:, 1])[:, None]
     dp = u / r - np.sum(d * u, axis=1)[:, None] * d / r**3
-    return np.concatenate([dp, tau[:, None] * dp + d / r], axis=1)
+    if retarded_c:
+        dp = np.einsum("bi,bij->bj", dp, emission_derivative(x[:4], p, obs, retarded_c))
+    return np.concatenate([dp, tau_e[:, None] * dp + d / r], axis=1)
 
 
 def _model(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-           heading: np.ndarray | None, c: float) -> tuple[np.ndarray, np.ndarray]:
-    """Angles (bearings, or cone angles on ``heading``) and frequencies of ``[x, f0]``."""
-    ang = (bearing_model(q[:4], tau, obs) if heading is None
-           else cone_model(q[:4], tau, obs, heading))
-    return ang, q[4] * doppler_factor(q[:4], tau, obs, obs_vel, c)
+           heading: np.ndarray | None, c: float, cr: float | None = None
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Angles (bearings, or cone angles on ``heading``) and frequencies of ``[x, f0]``
+    (``cr``: the sound speed of the retarded model, None without)."""
+    ang = (bearing_model(q[:4], tau, obs, cr) if heading is None
+           else cone_model(q[:4], tau, obs, heading, cr))
+    return ang, q[4] * doppler_factor(q[:4], tau, obs, obs_vel, c, retarded=bool(cr))
 
 
 def _jacobian(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-              heading: np.ndarray | None, c: float) -> np.ndarray:
+              heading: np.ndarray | None, c: float, cr: float | None = None) -> np.ndarray:
     """``∂[angles, frequencies]/∂[x, y, ẋ, ẏ, f0]`` (2B, 5), eq. (BF3)'s rows."""
-    ja = bo_jacobian(q[:4], tau, obs)
+    ja = bo_jacobian(q[:4], tau, obs, cr)
     if heading is not None:
-        ja = np.sign(_wrap(bearing_model(q[:4], tau, obs) - heading))[:, None] * ja
-    jf = np.concatenate([-q[4] / c * range_rate_gradient(q[:4], tau, obs, obs_vel),
-                         doppler_factor(q[:4], tau, obs, obs_vel, c)[:, None]], axis=1)
+        ja = np.sign(_wrap(bearing_model(q[:4], tau, obs, cr) - heading))[:, None] * ja
+    jf = np.concatenate([-q[4] / c * range_rate_gradient(q[:4], tau, obs, obs_vel, cr),
+                         doppler_factor(q[:4], tau, obs, obs_vel, c, bool(cr))[:, None]],
+                        axis=1)
     return np.concatenate([np.concatenate([ja, np.zeros((tau.size, 1))], axis=1), jf])
 
 
@@ -108,7 +128,7 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
                              max_range_m: float = 20000.0,
                              seed: int | np.random.Generator = 0, popsize: int = 20,
                              maxiter: int = 400, outliers: bool = False, poly_degree: int = 5,
-                             outlier_k: float = 4.0) -> TmaSolution:
+                             outlier_k: float = 4.0, retarded: bool = False) -> TmaSolution:
     """Maximum-likelihood bearings + frequency TMA (module doc, eqs. (BF1)-(BF3)).
 
     Parameters
@@ -136,6 +156,11 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         Polynomial-residue outlier rejection (:func:`.bo_tma.reject_outliers`) of the angles
         (on ``cos θ`` for cone angles) and of the frequencies; a row is dropped when either is
         rejected.
+    retarded : bool
+        The source at its emission time in both kinds of rows (eq. (M5) of :mod:`.motion`:
+        what arrives at ``t_b`` left the source ``R_b/c`` earlier), so that the state is the
+        source's at ``t0``; the global search uses the reception-time model, the polish and
+        the FIM the retarded one.
 
     Returns
     -------
@@ -181,18 +206,19 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     tau = t - t0
     o0, o1 = _observer_at(t, obs, t0), _observer_at(t, obs, t1)
     c = float(sound_speed)
+    cr = c if retarded else None
     n = t.size
     sig = [sigma_rad or max(noise_scale(t, ang if hd is not None else np.unwrap(ang)), 1e-5),
            sigma_hz or max(noise_scale(t, f), 1e-6)]
     w = np.concatenate([np.full(n, 1.0 / sig[0]), np.full(n, 1.0 / sig[1])])
 
     def res(q: np.ndarray) -> np.ndarray:
-        a, fm = _model(q, tau, obs, ov, hd, c)
+        a, fm = _model(q, tau, obs, ov, hd, c, cr)
         ra = ang - a if hd is not None else _wrap(ang - a)
         return w * np.concatenate([ra, f - fm])
 
     def jac(q: np.ndarray) -> np.ndarray:
-        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c)
+        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c, cr)
 
     def pop_cost(p: np.ndarray) -> np.ndarray:
         return bf_cost_population(p, tau, obs, ov, ang, hd if hd is not None else ang,
@@ -235,7 +261,7 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         q = found[sides]
         wj = jac(q)
         sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
-                              np.concatenate(_model(q, tau, obs, ov, hd, c)), n_used=n,
+                              np.concatenate(_model(q, tau, obs, ov, hd, c, cr)), n_used=n,
                               n_rejected=n_in - n, n_residuals=2 * n)
         sol.rss = float(np.sum((res(q)[:n] / w[:n]) ** 2))
         if sides[0]:

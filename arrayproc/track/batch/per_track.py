@@ -237,7 +237,7 @@ def _solve_track(tid: int, meas: dict[str, Any], tr: TrackRows, rec: Recording,
 
 
 def run_tracks_tma(tracks_path: str, config_path: str, output_path: str,
-                   progress: bool = False) -> list[TmaSolution]:
+                   progress: bool = False) -> list[tuple[int, TmaSolution]]:
     """Solve one batch TMA per confirmed track of a tracks file and write a ``tma`` group.
 
     Parameters
@@ -253,9 +253,9 @@ def run_tracks_tma(tracks_path: str, config_path: str, output_path: str,
 
     Returns
     -------
-    list of TmaSolution
-        In the order written (each track's preferred solution, then its mirror when
-        unresolved).
+    list of (int, TmaSolution)
+        Track id and solution, in the order written (each track's preferred solution, then
+        its mirror when unresolved: ``sol.mirror`` of the one before).
     """
     cfg = load_tma_config(config_path)
     tr = read_track_rows(tracks_path, cfg)
@@ -298,4 +298,4 @@ def run_tracks_tma(tracks_path: str, config_path: str, output_path: str,
                           "tracks": os.path.abspath(tracks_path)},
               track_ids=ids, measurements=tr.group, products=os.path.abspath(tr.products),
               tracks=os.path.abspath(tracks_path))
-    return sols
+    return list(zip(ids, sols, strict=True))

@@ -438,7 +438,8 @@ def _solve_bf(meas: dict, sel: np.ndarray, ts: np.ndarray, poses: list, obs: np.
         cfg["sigma_freq_hz"] or None, heading_rad=heading, sound_speed=rec.sound_speed,
         t0=w0, t1=w1, min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
         seed=cfg["seed"], popsize=cfg["popsize"], maxiter=cfg["maxiter"],
-        outliers=cfg["outliers"], poly_degree=cfg["poly_degree"], outlier_k=cfg["outlier_k"])
+        outliers=cfg["outliers"], poly_degree=cfg["poly_degree"], outlier_k=cfg["outlier_k"],
+        retarded=cfg["retarded_time"])
 
 
 def run_tma(products_path: str, config_path: str, output_path: str,

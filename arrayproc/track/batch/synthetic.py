@@ -7,7 +7,8 @@ Each row is what a moving line array measures of a source at a snapshot time ``t
 source at its emission time (``t − s``, ``|p(t) − v s − o| = c s`` solved in closed form),
 the cone angle of that emission point seen from the array's phase centre and made apparent by
 the array's motion along its axis (:mod:`.motion`, eq. (M3)), plus Gaussian noise; the
-received frequency ``f0 (1 − ṙ/c)`` (:func:`.bf_tma.doppler_factor`, eq. (BF1)) plus noise.
+received frequency ``f0 (1 − ṙ/c)`` of that emission point (:func:`.bf_tma.doppler_factor`,
+eq. (BF1)) plus noise.
 """
 
 from __future__ import annotations
@@ -114,8 +115,8 @@ def write_line_array_scenario(folder: str, nav: OwnTrack, sources: dict[str, Sou
         cone = np.arccos(np.clip(ct / (1 + v_ax / c * ct), -1.0, 1.0)) \
             + rng.normal(0, np.deg2rad(sigma_cone_deg), t.size)
         f = (np.full(t.size, np.nan) if s.f0_hz is None else
-             s.f0_hz * doppler_factor(st, t, centre, vel, c) + rng.normal(0, sigma_freq_hz,
-                                                                          t.size))
+             s.f0_hz * doppler_factor(st, t, centre, vel, c, retarded=True)
+             + rng.normal(0, sigma_freq_hz, t.size))
         det = rng.random(t.size) < s.p_detect
         for k, v in (("time", t), ("cone", np.abs(cone)), ("hd", hd), ("src", np.full(t.size, i)),
                      ("freq", f)):
