@@ -62,9 +62,12 @@ def tma(products: str, config: str, output: str, progress: bool = False) -> None
     Parameters
     ----------
     products : str
-        Products HDF5 file with a bearings or delays group.
+        Products HDF5 file with a bearings, lines or delays group, or a tracks file of the
+        multi-target tracker (one solution per confirmed track,
+        :mod:`arrayproc.track.batch.per_track`).
     config : str
-        TMA TOML file (``[tma] method = "bearings" | "delays" | "compact"``, …).
+        TMA TOML file (``[tma] method = "bearings" | "bearings_frequency" | "delays" |
+        "compact" | "auto"``, …).
     output : str
         Products HDF5 file to write (one ``tma`` group).
     progress : bool
@@ -75,6 +78,10 @@ def tma(products: str, config: str, output: str, progress: bool = False) -> None
     if rec is not None:
         inputs.append(rec)  # the recording whose navigation and geometry are read
     check_output(output, inputs)
+    from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
+    if is_tracks_file(products):  # one solution per confirmed track
+        run_tracks_tma(products, config, output, progress=progress)
+        return
     from arrayproc.track.batch.run import run_tma
     run_tma(products, config, output, progress=progress)
 

@@ -243,7 +243,7 @@ _KINDS = [
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),
         "t1": _c("s", "window end"),
-        "method": _c("", "bearings, delays or compact", dtype="S8"),
+        "method": _c("", "bearings, bearings_frequency, delays or compact", dtype="S20"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
         "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)", trailing=(4, 4)),
@@ -257,6 +257,12 @@ _KINDS = [
         "preferred": _c("", "1: the solution the data prefer; 0: its mirror (sides flipped), "
                         "written while the manoeuvre has not resolved the side", False,
                         dtype="i1"),
+        # one solution per track (a tracks file's input)
+        "track_id": _c("", "the track solved (its rows in the tracks file)", False,
+                       dtype="i8"),
+        "f0_hz": _c("Hz", "rest frequency of the tonal (bearings_frequency)", False),
+        "sigma_f0_hz": _c("Hz", "CRLB standard deviation of f0_hz", False),
+        "n_used": _c("", "measurement rows used", False, dtype="i8"),
     }),
 ]
 

@@ -32,65 +32,103 @@ import numpy as np
 from scipy.optimize import leastsq
 
 from ._kernels import bf_cost_population
-from .bo_tma import _observer_at, _wrap, bearing_model, cone_model, end_side_searches
+from .bo_tma import (
+    _observer_at,
+    _wrap,
+    bearing_model,
+    cone_model,
+    end_side_searches,
+    reject_outliers,
+)
 from .evolution import evolve
 from .fim import bo_jacobian
+from .motion import emission_derivative, emission_points
 from .result import PolarSearch, TmaSolution, end_value, finish_solution
 
-__all__ = ["doppler_factor", "range_rate_gradient", "solve_bearings_frequency"]
+__all__ = ["doppler_factor", "range_rate_gradient", "noise_scale", "solve_bearings_frequency"]
+
+
+def _emission(x: np.ndarray, tau: np.ndarray, obs: np.ndarray, retarded_c: float | None
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Source positions the rows see (B, 2) and their times since t0 (B,): at the reception
+    times, or at the emission times with a sound speed (eq. (M5) of :mod:`.motion`)."""
+    tau = np.asarray(tau, float)
+    if retarded_c:
+        return emission_points(x[:4], tau, obs, retarded_c)
+    return x[None, :2] + tau[:, None] * x[None, 2:4], tau
 
 
 def doppler_factor(state: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-                   sound_speed: float) -> np.ndarray:
+                   sound_speed: float, retarded: bool = False) -> np.ndarray:
     """``g_b = 1 − ṙ_b / c`` of eq. (BF1) for the kinematic state ``[x, y, ẋ, ẏ]`` at the
-    window start (m, m/s); ``tau`` (B,) s; ``obs``, ``obs_vel`` (B, 2) m and m/s."""
+    window start (m, m/s); ``tau`` (B,) s; ``obs``, ``obs_vel`` (B, 2) m and m/s;
+    ``retarded``: ``d`` from the source's emission point (eq. (M5) of :mod:`.motion`)."""
     x = np.asarray(state, float)
-    d = x[None, :2] + np.asarray(tau)[:, None] * x[None, 2:4] - obs
+    p, _ = _emission(x, tau, obs, sound_speed if retarded else None)
+    d = p - obs
     u = x[None, 2:4] - obs_vel
     return 1.0 - np.sum(d * u, axis=1) / np.hypot(d[:, 0], d[:, 1]) / sound_speed
 
 
 def range_rate_gradient(state: np.ndarray, tau: np.ndarray, obs: np.ndarray,
-                        obs_vel: np.ndarray) -> np.ndarray:
+                        obs_vel: np.ndarray, retarded_c: float | None = None) -> np.ndarray:
     """``∂ṙ_b/∂[x, y, ẋ, ẏ]`` (B, 4): with ``d = p + τ v − o``, ``u = v − v_o``, ``r = |d|``,
-    ``∂ṙ/∂p = u/r − (d·u) d / r³`` and ``∂ṙ/∂v = τ ∂ṙ/∂p + d/r``."""
+    ``∂ṙ/∂p = u/r − (d·u) d / r³`` and ``∂ṙ/∂v = τ ∂ṙ/∂p + d/r``; with ``retarded_c`` the
+    emission point ``p_e`` (τ_e its time) in place of ``p + τ v``, ``∂ṙ/∂p0 = ∂ṙ/∂p_e M⁻¹``
+    and ``∂ṙ/∂v = τ_e ∂ṙ/∂p_e M⁻¹ + d/r`` (:func:`.motion.emission_derivative`)."""
     x = np.asarray(state, float)
-    tau = np.asarray(tau, float)
-    d = x[None, :2] + tau[:, None] * x[None, 2:4] - obs
+    p, tau_e = _emission(x, tau, obs, retarded_c)
+    d = p - obs
     u = x[None, 2:4] - obs_vel
     r = np.hypot(d[:, 0], d[:, 1])[:, None]
     dp = u / r - np.sum(d * u, axis=1)[:, None] * d / r**3
-    return np.concatenate([dp, tau[:, None] * dp + d / r], axis=1)
+    if retarded_c:
+        dp = np.einsum("bi,bij->bj", dp, emission_derivative(x[:4], p, obs, retarded_c))
+    return np.concatenate([dp, tau_e[:, None] * dp + d / r], axis=1)
 
 
 def _model(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-           heading: np.ndarray | None, c: float) -> tuple[np.ndarray, np.ndarray]:
-    """Angles (bearings, or cone angles on ``heading``) and frequencies of ``[x, f0]``."""
-    ang = (bearing_model(q[:4], tau, obs) if heading is None
-           else cone_model(q[:4], tau, obs, heading))
-    return ang, q[4] * doppler_factor(q[:4], tau, obs, obs_vel, c)
+           heading: np.ndarray | None, c: float, cr: float | None = None
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Angles (bearings, or cone angles on ``heading``) and frequencies of ``[x, f0]``
+    (``cr``: the sound speed of the retarded model, None without)."""
+    ang = (bearing_model(q[:4], tau, obs, cr) if heading is None
+           else cone_model(q[:4], tau, obs, heading, cr))
+    return ang, q[4] * doppler_factor(q[:4], tau, obs, obs_vel, c, retarded=bool(cr))
 
 
 def _jacobian(q: np.ndarray, tau: np.ndarray, obs: np.ndarray, obs_vel: np.ndarray,
-              heading: np.ndarray | None, c: float) -> np.ndarray:
+              heading: np.ndarray | None, c: float, cr: float | None = None) -> np.ndarray:
     """``∂[angles, frequencies]/∂[x, y, ẋ, ẏ, f0]`` (2B, 5), eq. (BF3)'s rows."""
-    ja = bo_jacobian(q[:4], tau, obs)
+    ja = bo_jacobian(q[:4], tau, obs, cr)
     if heading is not None:
-        ja = np.sign(_wrap(bearing_model(q[:4], tau, obs) - heading))[:, None] * ja
-    jf = np.concatenate([-q[4] / c * range_rate_gradient(q[:4], tau, obs, obs_vel),
-                         doppler_factor(q[:4], tau, obs, obs_vel, c)[:, None]], axis=1)
+        ja = np.sign(_wrap(bearing_model(q[:4], tau, obs, cr) - heading))[:, None] * ja
+    jf = np.concatenate([-q[4] / c * range_rate_gradient(q[:4], tau, obs, obs_vel, cr),
+                         doppler_factor(q[:4], tau, obs, obs_vel, c, bool(cr))[:, None]],
+                        axis=1)
     return np.concatenate([np.concatenate([ja, np.zeros((tau.size, 1))], axis=1), jf])
+
+
+def noise_scale(times: np.ndarray, values: np.ndarray) -> float:
+    """Robust σ of the white noise on a smooth sequence from its second differences:
+    ``1.4826 MAD(Δ²y) / √6`` (white noise of σ gives Δ² of variance 6σ²); the first guess of
+    the weights when σ is not given."""
+    v = np.asarray(values, float)[np.argsort(times, kind="stable")]
+    d2 = np.diff(v, 2)
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0)) if d2.size \
+        else 0.0
 
 
 def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: np.ndarray,
                              observer_xy: np.ndarray, observer_vel: np.ndarray,
-                             sigma_rad: float, sigma_hz: float, *,
+                             sigma_rad: float | None, sigma_hz: float | None, *,
                              heading_rad: np.ndarray | None = None,
                              sound_speed: float = 1500.0, t0: float | None = None,
                              t1: float | None = None, min_range_m: float = 50.0,
                              max_range_m: float = 20000.0,
                              seed: int | np.random.Generator = 0, popsize: int = 20,
-                             maxiter: int = 400) -> TmaSolution:
+                             maxiter: int = 400, outliers: bool = False, poly_degree: int = 5,
+                             outlier_k: float = 4.0, retarded: bool = False) -> TmaSolution:
     """Maximum-likelihood bearings + frequency TMA (module doc, eqs. (BF1)-(BF3)).
 
     Parameters
@@ -103,8 +141,10 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         Received frequency of the source's tonal (Hz).
     observer_xy, observer_vel : (B, 2) array_like
         Array phase-centre positions (m) and velocities (m/s).
-    sigma_rad, sigma_hz : float
-        Angle and frequency standard deviations.
+    sigma_rad, sigma_hz : float or None
+        Angle and frequency standard deviations; None: estimated, each from the residuals of
+        its own rows at the solution (first guess :func:`noise_scale`, then two re-weighted
+        polishes).
     heading_rad : (B,) array_like, optional
         Array headings: the angles are a line array's cone angles, no side chosen (the
         search runs once per pair of end sides, as :func:`.bo_tma.solve_cone`).
@@ -112,12 +152,23 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         m/s.
     t0, t1, min_range_m, max_range_m, seed, popsize, maxiter
         As :func:`.bo_tma.solve_bearings`.
+    outliers, poly_degree, outlier_k
+        Polynomial-residue outlier rejection (:func:`.bo_tma.reject_outliers`) of the angles
+        (on ``cos θ`` for cone angles) and of the frequencies; a row is dropped when either is
+        rejected.
+    retarded : bool
+        The source at its emission time in both kinds of rows (eq. (M5) of :mod:`.motion`:
+        what arrives at ``t_b`` left the source ``R_b/c`` earlier), so that the state is the
+        source's at ``t0``; the global search uses the reception-time model, the polish and
+        the FIM the retarded one.
 
     Returns
     -------
     TmaSolution
         ``method = "bearings_frequency"``; ``state`` is ``[x, y, ẋ, ẏ, f0]`` (m, m/s, Hz) at
-        ``t0`` with the 5 × 5 ``cov`` and ``crlb``; ``side`` as :func:`.bo_tma.solve_cone`.
+        ``t0`` with the 5 × 5 ``cov`` and ``crlb``; for cone angles ``side``, ``cost_other``
+        and ``mirror`` (the solution with both end sides flipped) as
+        :func:`.bo_tma.solve_cone`.
 
     Examples
     --------
@@ -140,7 +191,12 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     obs = np.asarray(observer_xy, float).reshape(t.size, 2)
     ov = np.asarray(observer_vel, float).reshape(t.size, 2)
     hd = None if heading_rad is None else np.asarray(heading_rad, float).reshape(-1)
-    ok = np.isfinite(ang) & np.isfinite(f)
+    ok = np.isfinite(ang) & np.isfinite(f) & np.isfinite(t)
+    n_in = int(ok.sum())
+    if outliers and n_in > poly_degree + 2:
+        ok[ok] = (reject_outliers(t[ok], np.cos(ang[ok]) if hd is not None
+                                  else np.unwrap(ang[ok]), None, poly_degree, outlier_k)
+                  & reject_outliers(t[ok], f[ok], None, poly_degree, outlier_k))
     t, ang, f, obs, ov = t[ok], ang[ok], f[ok], obs[ok], ov[ok]
     hd = None if hd is None else hd[ok]
     if t.size < 6:
@@ -149,20 +205,27 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     t1 = float(t[-1] if t1 is None else t1)
     tau = t - t0
     o0, o1 = _observer_at(t, obs, t0), _observer_at(t, obs, t1)
-    w = np.concatenate([np.full(t.size, 1.0 / sigma_rad), np.full(t.size, 1.0 / sigma_hz)])
     c = float(sound_speed)
+    cr = c if retarded else None
+    n = t.size
+    sig = [sigma_rad or max(noise_scale(t, ang if hd is not None else np.unwrap(ang)), 1e-5),
+           sigma_hz or max(noise_scale(t, f), 1e-6)]
+    w = np.concatenate([np.full(n, 1.0 / sig[0]), np.full(n, 1.0 / sig[1])])
 
     def res(q: np.ndarray) -> np.ndarray:
-        a, fm = _model(q, tau, obs, ov, hd, c)
+        a, fm = _model(q, tau, obs, ov, hd, c, cr)
         ra = ang - a if hd is not None else _wrap(ang - a)
         return w * np.concatenate([ra, f - fm])
 
     def jac(q: np.ndarray) -> np.ndarray:
-        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c)
+        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c, cr)
 
     def pop_cost(p: np.ndarray) -> np.ndarray:
         return bf_cost_population(p, tau, obs, ov, ang, hd if hd is not None else ang,
-                                  hd is not None, w[:t.size], f, w[t.size:], 1.0 / c)
+                                  hd is not None, w[:n], f, w[n:], 1.0 / c)
+
+    def polish(q0: np.ndarray) -> np.ndarray:
+        return leastsq(res, q0, Dfun=jac, xtol=1e-12, ftol=1e-12, gtol=1e-12, maxfev=200)[0]
 
     if hd is None:
         (b0, e0), (b1, e1) = end_value(t, ang, t0), end_value(t, ang, t1)
@@ -170,22 +233,45 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
                                           min_range_m, max_range_m, t1 - t0, o0, o1)}
     else:
         searches = end_side_searches(t, ang, hd, t0, t1, o0, o1, min_range_m, max_range_m)
-    best = None
+    found = {}
     for sides, search in searches.items():
         de = evolve(lambda q, s=search: pop_cost(s.to_state(q)), search.bounds, seed,
                     popsize=popsize, maxiter=maxiter, tol=1e-3, mutation=(0.5, 1.0),
                     recombination=0.9)
         x = search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
         g = doppler_factor(x, tau, obs, ov, c)
-        q0 = np.append(x, np.sum(g * f) / np.sum(g * g))            # eq. (BF2)
-        q = leastsq(res, q0, Dfun=jac, xtol=1e-12, ftol=1e-12, gtol=1e-12, maxfev=200)[0]
-        cost = float(np.sum(res(q) ** 2))
-        if best is None or cost < best[0]:
-            best = (cost, q, sides)
-    _, q, sides = best
-    wj = jac(q)
-    sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
-                          np.concatenate(_model(q, tau, obs, ov, hd, c)), n_used=t.size)
-    if sides[0]:
-        sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
+        found[sides] = polish(np.append(x, np.sum(g * f) / np.sum(g * g)))  # eq. (BF2)
+
+    def cost(q: np.ndarray) -> float:
+        return float(np.sum(res(q) ** 2))
+
+    best = min(found, key=lambda k: cost(found[k]))
+    for _ in range(2 if sigma_rad is None or sigma_hz is None else 0):
+        r = res(found[best]) / w                     # unweighted residuals of the best
+        dof = max(n - 2.5, 1.0)                      # the five parameters shared by the kinds
+        if sigma_rad is None:
+            sig[0] = max(float(np.sqrt(np.sum(r[:n] ** 2) / dof)), 1e-9)
+        if sigma_hz is None:
+            sig[1] = max(float(np.sqrt(np.sum(r[n:] ** 2) / dof)), 1e-9)
+        w[:n], w[n:] = 1.0 / sig[0], 1.0 / sig[1]
+        found = {k: polish(q) for k, q in found.items()}
+        best = min(found, key=lambda k: cost(found[k]))
+
+    def finish(sides: tuple[str, str]) -> TmaSolution:
+        q = found[sides]
+        wj = jac(q)
+        sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
+                              np.concatenate(_model(q, tau, obs, ov, hd, c, cr)), n_used=n,
+                              n_rejected=n_in - n, n_residuals=2 * n)
+        sol.rss = float(np.sum((res(q)[:n] / w[:n]) ** 2))
+        if sides[0]:
+            sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
+        return sol
+
+    sol = finish(best)
+    if hd is not None:
+        flip = {"port": "starboard", "starboard": "port"}
+        m = finish((flip[best[0]], flip[best[1]]))
+        sol.cost_other, m.cost_other = m.cost, sol.cost
+        sol.mirror = m
     return sol

@@ -220,15 +220,17 @@ def global_then_local(pop_cost: Callable[[np.ndarray], np.ndarray],
 
 def finish_solution(method: str, t0: float, t1: float, state: np.ndarray, wres: np.ndarray,
                     wjac: np.ndarray, fim: np.ndarray, observer: np.ndarray, fitted: np.ndarray,
-                    n_used: int, n_rejected: int = 0) -> TmaSolution:
+                    n_used: int, n_rejected: int = 0, n_residuals: int | None = None
+                    ) -> TmaSolution:
     """Assemble a :class:`TmaSolution` from the weighted residuals and Jacobian at the estimate.
 
-    ``cov = s² (wjacᵀ wjac)⁻¹`` with ``s² = Σ wres² / (n_used − 4)``; ``crlb = fim⁻¹``;
-    both blanked where not positive definite.
+    ``cov = s² (wjacᵀ wjac)⁻¹`` with ``s² = Σ wres² / (n_res − n_par)`` (``n_res`` the
+    residuals, ``n_residuals`` when given, else ``n_used``; ``n_par`` the state's size);
+    ``crlb = fim⁻¹``; both blanked where not positive definite.
     """
     n = int(n_used)
     cost = float(np.sum(wres**2))
-    s2 = cost / max(n - state.size, 1)
+    s2 = cost / max((n if n_residuals is None else int(n_residuals)) - state.size, 1)
     gn, _ = crlb_from_fim(wjac.T @ wjac)
     crlb, _ = crlb_from_fim(fim)
     return TmaSolution(

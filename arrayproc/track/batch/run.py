@@ -95,9 +95,10 @@ from arrayproc.io.recording import Recording
 from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 
+from .bf_tma import solve_bearings_frequency
 from .bo_tma import solve_line_bearings
 from .compact import solve_compact
-from .motion import axial_speed, nav_velocity
+from .motion import axial_speed, nav_velocity, static_cone
 from .result import TmaSolution
 from .td_tma import solve_delays
 
@@ -118,11 +119,19 @@ def _gate(v: Any) -> str | None:
 
 
 PARAMS = Schema({
-    "method": Param("str", doc="bearings | delays | compact",
-                    choices=("bearings", "delays", "compact")),
+    "method": Param("str", doc="bearings | bearings_frequency | delays | compact | auto "
+                    "(a tracks file: bearings_frequency for a track with line frequencies, "
+                    "else bearings; a products file: bearings)",
+                    choices=("bearings", "bearings_frequency", "delays", "compact", "auto")),
     "window": Param("float", 0.0, "s per solution; 0: the whole file", check=_non_negative),
     "step": Param("float", 0.0, "s between window starts; 0: the window", check=_non_negative),
     "sigma_bearing_deg": Param("float", 0.0, "bearing σ, deg; 0: estimated", check=_non_negative),
+    "sigma_freq_hz": Param("float", 0.0, "bearings_frequency: line-frequency σ, Hz; 0: "
+                           "estimated from the residuals", check=_non_negative, unit="Hz"),
+    "min_rows": Param("int", 10, "tracks file: a confirmed track with fewer measurement rows "
+                      "is not solved", check=positive),
+    "min_duration_s": Param("float", 60.0, "tracks file: a confirmed track whose rows span "
+                            "less than this is not solved", check=_non_negative, unit="s"),
     "sigma_delay_s": Param("float", 0.0, "delay σ, s; 0: product σ or estimated",
                            check=_non_negative),
     "group": Param("str", "", "products group to read"),
@@ -224,8 +233,9 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
     ``heading`` (rad; heading = the port/starboard pair's mean, cone = half their
     difference), ``port``, ``stbd`` (rad), and ``azimuth`` (rad) when the group has
     ``azimuth_deg`` (a volumetric/planar array's rows, which ``compact`` then reads; port and
-    starboard default to it when absent), else None. Delays: ``time``, ``tau`` (n, n_ch) s,
-    ``sigma`` (n, n_ch) s or None, ``reference``.
+    starboard default to it when absent), else None; ``freq`` (Hz) for ``bearings_frequency``,
+    which reads a ``lines`` group (one tonal's rows: :func:`select_rows`), else None. Delays:
+    ``time``, ``tau`` (n, n_ch) s, ``sigma`` (n, n_ch) s or None, ``reference``.
 
     Parameters
     ----------
@@ -241,26 +251,20 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
     """
     prod = read_products(products_path)
     src = as_text(prod["/"].get("source", ""))
-    kind = "delays" if cfg["method"] == "delays" else "bearings"
+    kind = {"delays": "delays", "bearings_frequency": "lines"}.get(cfg["method"], "bearings")
     name, g = _group(prod, kind, cfg["group"], products_path)
     out: dict[str, Any] = {"group": name, "source": src}
     if kind == "delays":
         d = delays_columns(g, products_path)
         out.update(time=d["time"], tau=d["tau"], sigma=d["sigma"], reference=d["reference"])
         return out
-    has_az = "azimuth_deg" in g  # a volumetric/planar array's bearings (cbf_azel)
-    for k in ("time",) + (() if has_az else ("bearing_port_deg", "bearing_stbd_deg")):
-        if k not in g:
-            raise FormatError(f"{products_path}: bearings column {k!r} is missing")
-    t = np.asarray(g["time"], float).reshape(-1)
-    az = np.asarray(g["azimuth_deg"], float).reshape(-1) if has_az else None
-    port = np.asarray(g["bearing_port_deg"], float).reshape(-1) if "bearing_port_deg" in g \
-        else az
-    stbd = np.asarray(g["bearing_stbd_deg"], float).reshape(-1) if "bearing_stbd_deg" in g \
-        else az
-    ok = np.isfinite(t) & np.isfinite(port) & np.isfinite(stbd)
-    if has_az:
-        ok &= np.isfinite(az)
+    cols = bearing_columns(g, products_path, need_freq=kind == "lines")
+    t = cols["time"]
+    ok = np.isfinite(t) & np.isfinite(cols["port"]) & np.isfinite(cols["stbd"])
+    if cols["azimuth"] is not None:
+        ok &= np.isfinite(cols["azimuth"])
+    if cols["freq"] is not None:
+        ok &= np.isfinite(cols["freq"])
     if cfg["cone_gate"] is not None:
         if "cone_deg" not in g:
             raise FormatError(f"{products_path}: bearings column 'cone_deg' is missing "
@@ -276,11 +280,43 @@ def read_measurements(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]
     idx = idx[first]                                        # one row per time
     if idx.size < 5:
         raise FormatError(f"{products_path}: fewer than 5 usable bearing rows in {name!r}")
-    p, s = np.deg2rad(port[idx]), np.deg2rad(stbd[idx])
-    cone = np.mod(s - p, 2 * np.pi) / 2                     # stbd − port = 2θ
-    out.update(time=t[idx], port=p, stbd=s, cone=cone, heading=p + cone,
-               azimuth=np.deg2rad(az[idx]) if has_az else None)
+    out.update(select_rows(cols, idx))
     return out
+
+
+def bearing_columns(g: Mapping[str, Any], path: str, need_freq: bool = False
+                    ) -> dict[str, np.ndarray | None]:
+    """The columns of a ``bearings`` (or ``lines``) group that the bearing methods read, in
+    degrees as stored: ``time``, ``port``, ``stbd`` (port and starboard default to
+    ``azimuth_deg`` when absent), ``azimuth`` (None without ``azimuth_deg``) and ``freq``
+    (``freq_hz``, None when absent; FormatError when ``need_freq`` and absent)."""
+    has_az = "azimuth_deg" in g  # a volumetric/planar array's bearings (cbf_azel)
+    need = ("time",) + (() if has_az else ("bearing_port_deg", "bearing_stbd_deg"))
+    for k in need + (("freq_hz",) if need_freq else ()):
+        if k not in g:
+            raise FormatError(f"{path}: {as_text(g.get('kind', 'bearings'))} column {k!r} is "
+                              "missing")
+
+    def col(k: str) -> np.ndarray | None:
+        return np.asarray(g[k], float).reshape(-1) if k in g else None
+
+    az = col("azimuth_deg")
+    port, stbd = col("bearing_port_deg"), col("bearing_stbd_deg")
+    return {"time": col("time"), "port": az if port is None else port,
+            "stbd": az if stbd is None else stbd, "azimuth": az, "freq": col("freq_hz")}
+
+
+def select_rows(cols: Mapping[str, np.ndarray | None], idx: np.ndarray) -> dict[str, Any]:
+    """The rows ``idx`` of :func:`bearing_columns` as the bearing methods read them: ``time``
+    (s), ``port``, ``stbd`` (rad), ``cone`` and ``heading`` (rad; heading = the port/starboard
+    pair's mean, cone = half their difference), ``azimuth`` (rad or None) and ``freq`` (Hz or
+    None)."""
+    p, s = np.deg2rad(cols["port"][idx]), np.deg2rad(cols["stbd"][idx])
+    cone = np.mod(s - p, 2 * np.pi) / 2                     # stbd − port = 2θ
+    az, f = cols["azimuth"], cols["freq"]
+    return {"time": cols["time"][idx], "port": p, "stbd": s, "cone": cone, "heading": p + cone,
+            "azimuth": None if az is None else np.deg2rad(az[idx]),
+            "freq": None if f is None else f[idx]}
 
 
 def _windows(t: np.ndarray, window: float, step: float) -> list[tuple[float, float]]:
@@ -367,6 +403,8 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
                              correlation_s=cfg["correlation_s"], t0=w0, t1=w1,
                              max_range_m=cfg["max_range_m"], n_grid=cfg["n_grid"],
                              n_headings=cfg["n_headings"])
+    if cfg["method"] == "bearings_frequency":
+        return _solve_bf(meas, sel, ts, poses, obs, rec, cfg, w0, w1)
     kw = dict(min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
               outliers=cfg["outliers"], poly_degree=cfg["poly_degree"],
               outlier_k=cfg["outlier_k"], popsize=cfg["popsize"], maxiter=cfg["maxiter"],
@@ -377,6 +415,31 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
     return solve_line_bearings(ts, meas["cone"][sel], meas["heading"][sel], obs, sig,
                                side=cfg["side"], axial_speed_mps=v_ax,
                                sound_speed=rec.sound_speed, **kw)
+
+
+def _solve_bf(meas: dict, sel: np.ndarray, ts: np.ndarray, poses: list, obs: np.ndarray,
+              rec: Recording, cfg: dict, w0: float, w1: float) -> TmaSolution:
+    """Bearings + frequency over the window's rows (:func:`.bf_tma.solve_bearings_frequency`):
+    a line array's cone angles (corrected for the array's motion when ``array_motion``) with
+    no side chosen, or a volumetric array's azimuths."""
+    if meas.get("freq") is None:
+        raise ConfigError("tma.method = 'bearings_frequency' needs line frequencies (a lines "
+                          "group, or a track with frequencies)")
+    vel = nav_velocity(rec.nav, ts)
+    hd = np.deg2rad([p.heading for p in poses])
+    if meas.get("azimuth") is not None:
+        ang, heading = meas["azimuth"][sel], None
+    else:
+        ang, heading = meas["cone"][sel], meas["heading"][sel]
+        if cfg["array_motion"]:
+            ang = static_cone(ang, axial_speed(vel, hd), rec.sound_speed)
+    return solve_bearings_frequency(
+        ts, ang, meas["freq"][sel], obs, vel, np.deg2rad(cfg["sigma_bearing_deg"]) or None,
+        cfg["sigma_freq_hz"] or None, heading_rad=heading, sound_speed=rec.sound_speed,
+        t0=w0, t1=w1, min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
+        seed=cfg["seed"], popsize=cfg["popsize"], maxiter=cfg["maxiter"],
+        outliers=cfg["outliers"], poly_degree=cfg["poly_degree"], outlier_k=cfg["outlier_k"],
+        retarded=cfg["retarded_time"])
 
 
 def run_tma(products_path: str, config_path: str, output_path: str,
@@ -399,6 +462,8 @@ def run_tma(products_path: str, config_path: str, output_path: str,
     list of TmaSolution
     """
     cfg = load_tma_config(config_path)
+    if cfg["method"] == "auto":  # a products file's bearing rows carry no source's tonal
+        cfg["method"] = "bearings"
     meas = read_measurements(products_path, cfg)
     rec_path = cfg["recording"] or meas["source"]
     if not rec_path:
@@ -416,14 +481,7 @@ def run_tma(products_path: str, config_path: str, output_path: str,
             except ValueError as e:
                 raise FormatError(f"{products_path}: window [{w0:g}, {w1:g}] s: {e}") from None
             sols.append(sol)
-            own = rec.nav.at(w0)[0][0]
-            rng = float(np.hypot(sol.state[0] - own[0], sol.state[1] - own[1]))
-            if not rng <= 2.0 * cfg["max_range_m"]:
-                warnings.warn(f"{products_path}: window [{w0:g}, {w1:g}] s: the solution lies "
-                              f"{rng:.3g} m away, beyond twice tma.max_range_m: the window may "
-                              "be unobservable (no ownship manoeuvre) or its rows may mix "
-                              "several sources (give one source's rows, e.g. a cone_gate)",
-                              stacklevel=2)
+            warn_if_far(sol, rec, cfg, f"{products_path}: window [{w0:g}, {w1:g}] s")
             if progress:
                 print(f"tma {cfg['method']} [{w0:8.1f}, {w1:8.1f}] s: x {sol.state[0]:9.1f} "
                       f"y {sol.state[1]:9.1f} m, course {sol.heading_deg:5.1f} deg, speed "
@@ -432,32 +490,69 @@ def run_tma(products_path: str, config_path: str, output_path: str,
     if not sols:
         raise FormatError(f"{products_path}: no window with 5 or more measurements")
     sols = with_unresolved_mirrors(sols, cfg["mirror_chi2"], products_path)
+    write_tma(output_path, sols, rec_path, cfg, root_attrs={"products": os.path.abspath(
+        products_path)}, measurements=meas["group"], products=os.path.abspath(products_path))
+    return sols
+
+
+def warn_if_far(sol: TmaSolution, rec: Recording, cfg: dict[str, Any], where: str) -> bool:
+    """Warn (and return True) when a solution lies beyond twice ``tma.max_range_m`` from the
+    array at its start: the rows may be unobservable (no ownship manoeuvre) or mix sources."""
+    own = rec.nav.at(sol.t0)[0][0]
+    rng = float(np.hypot(sol.state[0] - own[0], sol.state[1] - own[1]))
+    if rng <= 2.0 * cfg["max_range_m"]:
+        return False
+    warnings.warn(f"{where}: the solution lies {rng:.3g} m away, beyond twice "
+                  "tma.max_range_m: the rows may be unobservable (no ownship manoeuvre) or "
+                  "mix several sources (give one source's rows, e.g. a cone_gate)",
+                  stacklevel=3)
+    return True
+
+
+def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
+                ) -> dict[str, np.ndarray]:
+    """The ``tma`` rows of solutions (products kind ``tma``, docs/formats.md): the kinematic
+    4 × 4 blocks of ``cov`` and ``crlb``; ``f0_hz`` and ``sigma_f0_hz`` (NaN without a rest
+    frequency) and ``track_id`` when ``track_ids`` (one per solution) is given. A solution is
+    ``preferred`` unless it is another's mirror."""
     mirrors = {id(s.mirror) for s in sols if s.mirror is not None}
-    with ProductsWriter(output_path, source=rec_path,
-                        attrs={"products": os.path.abspath(products_path)}) as w:
-        g = w.group("tma", "tma", stage="tma", method=cfg["method"], measurements=meas["group"],
-                    products=os.path.abspath(products_path), recording=rec_path,
+    f0 = np.array([s.state[4] if s.state.size > 4 else np.nan for s in sols])
+    sf0 = np.array([np.sqrt(s.crlb[4, 4]) if s.state.size > 4 else np.nan for s in sols])
+    cols = dict(
+        t0=np.array([s.t0 for s in sols]), t1=np.array([s.t1 for s in sols]),
+        method=np.array([s.method.encode() for s in sols], dtype="S20"),
+        x=np.array([s.state[0] for s in sols]), y=np.array([s.state[1] for s in sols]),
+        vx=np.array([s.state[2] for s in sols]), vy=np.array([s.state[3] for s in sols]),
+        cov=np.stack([s.cov[:4, :4] for s in sols]), crlb=np.stack([s.crlb[:4, :4] for s in sols]),
+        cost=np.array([s.cost for s in sols]),
+        fim_cond=np.array([s.fim_cond if math.isfinite(s.fim_cond) else np.inf for s in sols]),
+        heading_deg=np.array([s.heading_deg for s in sols]),
+        speed_mps=np.array([s.speed_mps for s in sols]),
+        range_sigma_m=np.array([s.range_sigma for s in sols]),
+        cost_mirror=np.array([s.cost_other for s in sols]),
+        preferred=np.array([id(s) not in mirrors for s in sols], dtype=np.int8))
+    if track_ids is not None:
+        cols.update(track_id=np.asarray(track_ids, np.int64), f0_hz=f0, sigma_f0_hz=sf0,
+                    n_used=np.array([s.n_used for s in sols], np.int64))
+    elif np.any(np.isfinite(f0)):
+        cols.update(f0_hz=f0, sigma_f0_hz=sf0)
+    return cols
+
+
+def write_tma(output_path: str, sols: list[TmaSolution], rec_path: str, cfg: dict[str, Any],
+              root_attrs: dict[str, Any], track_ids: list[int] | None = None,
+              **attrs: Any) -> None:
+    """Write the solutions as one ``tma`` group named ``tma`` (:func:`tma_columns`); ``attrs``
+    are the group's attributes beside the method's settings."""
+    with ProductsWriter(output_path, source=rec_path, attrs=root_attrs) as w:
+        g = w.group("tma", "tma", stage="tma", method=cfg["method"], recording=rec_path,
                     side=",".join(s.side for s in sols),
                     sigma_bearing_deg=cfg["sigma_bearing_deg"],
-                    sigma_delay_s=cfg["sigma_delay_s"],
+                    sigma_delay_s=cfg["sigma_delay_s"], sigma_freq_hz=cfg["sigma_freq_hz"],
                     delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols),
                     array_motion=int(cfg["array_motion"]),
-                    retarded_time=int(cfg["retarded_time"]))
-        g.append(
-            t0=np.array([s.t0 for s in sols]), t1=np.array([s.t1 for s in sols]),
-            method=np.array([s.method.encode() for s in sols], dtype="S8"),
-            x=np.array([s.state[0] for s in sols]), y=np.array([s.state[1] for s in sols]),
-            vx=np.array([s.state[2] for s in sols]), vy=np.array([s.state[3] for s in sols]),
-            cov=np.stack([s.cov for s in sols]), crlb=np.stack([s.crlb for s in sols]),
-            cost=np.array([s.cost for s in sols]),
-            fim_cond=np.array([s.fim_cond if math.isfinite(s.fim_cond) else np.inf
-                               for s in sols]),
-            heading_deg=np.array([s.heading_deg for s in sols]),
-            speed_mps=np.array([s.speed_mps for s in sols]),
-            range_sigma_m=np.array([s.range_sigma for s in sols]),
-            cost_mirror=np.array([s.cost_other for s in sols]),
-            preferred=np.array([id(s) not in mirrors for s in sols], dtype=np.int8))
-    return sols
+                    retarded_time=int(cfg["retarded_time"]), **attrs)
+        g.append(**tma_columns(sols, track_ids))
 
 
 def with_unresolved_mirrors(sols: list[TmaSolution], chi2: float, where: str
