@@ -1,0 +1,166 @@
+"""Source hypotheses from the peaks of every pair: association by delay closure over triplets.
+
+One source heard at arrival times t_i gives the pair delays τ_ab = t_b − t_a, which close over
+every triplet of channels:
+
+    τ_ab + τ_bc = τ_ac.                                                        (C1)
+
+Against the reference channel r this says that the delays of the reference pairs fix every
+other pair's, τ_ab = τ_rb − τ_ra. A source hypothesis is one peak of each reference pair
+(r, j), j ≠ r, from the K kept (:mod:`.peaks`); its triplet (r, a, b) closes when pair (a, b)
+holds a peak within the tolerance of the implied lag,
+
+    |τ̂_ab − (τ_rb − τ_ra)| ≤ g √(σ_ra² + σ_rb² + σ_ab²) + ε,                      (C2)
+
+g = ``n_sigma`` and ε = ``floor`` s (multipath and the refinement's last step). Its score is
+Σ ρ over its reference peaks and its closing peaks (the correlation of every pair at the lags the
+hypothesis implies: the steered response of PHAT-weighted pairs when ρ comes from PHAT
+peaks) and its closure the fraction of the (n − 1)(n − 2)/2 triplets through r that close.
+All K^(n−1) hypotheses of a snapshot are scored at once (numpy over hypotheses × pairs × peaks);
+the best is taken, its peaks (reference and closing) are removed, and the next best of the
+hypotheses left is taken, up to ``max_sources``. The first is always kept (as the one-peak
+estimator always gives a row); the others only with a closure of at least ``min_closure``.
+Ties fall to the hypothesis with the smaller lags, so the result does not depend on the order
+in which the peaks are listed. Written on numpy: no library associates TDOA peaks this way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["SourceHypotheses", "closure_hypotheses"]
+
+
+@dataclass(frozen=True)
+class SourceHypotheses:
+    """The sources of one snapshot, strongest first.
+
+    Attributes
+    ----------
+    tau, sigma, corr : (H, n_ch) ndarray
+        Delay of every channel after the reference (s), its σ (s) and peak correlation
+        (0, 0 and 1 on the reference), as the one-source ``delays`` row.
+    closure : (H,) ndarray
+        Fraction of the triplets through the reference that close (eq. (C2)); 1 with fewer
+        than three channels.
+    score : (H,) ndarray
+        Σ ρ of the hypothesis's reference and closing peaks.
+    """
+
+    tau: np.ndarray
+    sigma: np.ndarray
+    corr: np.ndarray
+    closure: np.ndarray
+    score: np.ndarray
+
+
+def _reference_view(pairs: np.ndarray, tau: np.ndarray, reference: int, n_ch: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Index of pair (r, j) for each j ≠ r, the sign that turns its lag into τ_rj, and the
+    other channels j."""
+    others = np.array([j for j in range(n_ch) if j != reference], np.int64)
+    where = {(int(a), int(b)): p for p, (a, b) in enumerate(pairs)}
+    idx = np.empty(others.size, np.int64)
+    sign = np.empty(others.size)
+    for q, j in enumerate(others):
+        if (reference, j) in where:
+            idx[q], sign[q] = where[(reference, int(j))], 1.0
+        else:
+            idx[q], sign[q] = where[(int(j), reference)], -1.0
+    return idx, sign, others
+
+
+def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
+                       pairs: np.ndarray, n_ch: int, reference: int, max_sources: int = 2,
+                       n_sigma: float = 4.0, floor: float = 2e-5, min_closure: float = 0.5
+                       ) -> SourceHypotheses:
+    """Source hypotheses of one snapshot from the peaks of every pair (module docstring).
+
+    Parameters
+    ----------
+    tau, sigma, corr : (P, K) arrays
+        Peaks of every pair of ``pairs`` (NaN where absent): lag of b after a (s), σ (s), ρ.
+    pairs : (P, 2) int array
+        Every channel pair (a, b), a < b.
+    n_ch : int
+        Channels.
+    reference : int
+        Reference channel of the output delays.
+    max_sources : int
+        Most hypotheses returned.
+    n_sigma, floor : float
+        Closure tolerance g (σ) and ε (s) of eq. (C2).
+    min_closure : float
+        Least closure of every hypothesis after the first.
+
+    Returns
+    -------
+    SourceHypotheses
+        H ≤ ``max_sources`` hypotheses (0 when a reference pair has no peak).
+    """
+    tau = np.asarray(tau, float)
+    sigma = np.asarray(sigma, float)
+    corr = np.asarray(corr, float)
+    pairs = np.asarray(pairs, np.int64)
+    P, K = tau.shape
+    ok = np.isfinite(tau) & np.isfinite(sigma) & np.isfinite(corr)
+    ridx, rsign, others = _reference_view(pairs, tau, reference, n_ch)
+    nr = others.size
+    empty = SourceHypotheses(np.zeros((0, n_ch)), np.zeros((0, n_ch)), np.zeros((0, n_ch)),
+                             np.zeros(0), np.zeros(0))
+    if nr == 0 or not ok[ridx].any(axis=1).all():
+        return empty
+    # every combination of one peak per reference pair: (M, nr) peak columns
+    combo = np.stack(np.meshgrid(*[np.arange(K)] * nr, indexing="ij"), -1).reshape(-1, nr)
+    rows = np.broadcast_to(ridx, combo.shape)
+    valid = ok[rows, combo].all(axis=1)
+    combo = combo[valid]
+    t_ref = rsign * tau[ridx[None, :], combo]            # (M, nr) τ_rj
+    s_ref = sigma[ridx[None, :], combo]
+    c_ref = corr[ridx[None, :], combo].sum(axis=1)
+    # the other pairs (a, b), neither the reference, and the reference slots of a and b
+    slot = np.full(n_ch, -1, np.int64)
+    slot[others] = np.arange(nr)
+    rest = np.flatnonzero((pairs[:, 0] != reference) & (pairs[:, 1] != reference))
+    qa, qb = slot[pairs[rest, 0]], slot[pairs[rest, 1]]
+    implied = t_ref[:, qb] - t_ref[:, qa]                 # (M, nq)
+    var_ref = s_ref[:, qa] ** 2 + s_ref[:, qb] ** 2
+    used = np.zeros((P, K), bool)
+    alive = np.ones(combo.shape[0], bool)
+    out: list[tuple] = []
+    nq = rest.size
+    tol = n_sigma * np.sqrt(var_ref[:, :, None] + sigma[rest][None] ** 2) + floor
+    hit = (np.abs(tau[rest][None] - implied[:, :, None]) <= tol) & ok[rest][None]
+    cq_all = np.where(hit, corr[rest][None], -np.inf)
+    close_col = cq_all.argmax(axis=2)                     # (M, nq) best closing peak
+    closed = hit.any(axis=2)
+    n_closed = closed.sum(axis=1)
+    frac = n_closed / nq if nq else np.ones(combo.shape[0])
+    c_close = np.take_along_axis(cq_all, close_col[:, :, None], axis=2)[:, :, 0]
+    c_refs = corr[ridx[None, :], combo]
+    score = c_ref + np.where(closed, c_close, 0.0).sum(axis=1)
+    while alive.any() and len(out) < max_sources:
+        # a further source must bring reference peaks of its own (not re-use the earlier's)
+        new_ref = ~used[ridx[None, :], combo]
+        cand = alive & ((frac >= min_closure) & (new_ref.sum(axis=1) > 0.5 * nr)
+                        if out else True)
+        if not cand.any():
+            break
+        c_idx = np.flatnonzero(cand)
+        # highest score; ties to the smaller lags (independent of the order of the peaks)
+        keys = [t_ref[c_idx, q] for q in range(nr - 1, -1, -1)] + [-score[c_idx]]
+        h = int(c_idx[np.lexsort(keys)[0]])
+        out.append((t_ref[h], s_ref[h], c_refs[h], frac[h], score[h]))
+        used[ridx, combo[h]] = True
+        used[rest[closed[h]], close_col[h, closed[h]]] = True
+        alive[h] = False
+    H = len(out)
+    T = np.zeros((H, n_ch))
+    Sg = np.zeros((H, n_ch))
+    Cr = np.ones((H, n_ch))
+    for i, (t, s, c, _, _) in enumerate(out):
+        T[i, others], Sg[i, others], Cr[i, others] = t, s, c
+    return SourceHypotheses(T, Sg, Cr, np.array([o[3] for o in out], float),
+                            np.array([o[4] for o in out], float))
