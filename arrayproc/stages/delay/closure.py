@@ -17,8 +17,12 @@ g = ``n_sigma`` and ε = ``floor`` s (multipath and the refinement's last step).
 hypothesis implies: the steered response of PHAT-weighted pairs when ρ comes from PHAT
 peaks) and its closure the fraction of the (n − 1)(n − 2)/2 triplets through r that close.
 All K^(n−1) hypotheses of a snapshot are scored at once (numpy over hypotheses × pairs × peaks);
-the best is taken, its peaks (reference and closing) are removed, and the next best of the
-hypotheses left is taken, up to ``max_sources``. The first is always kept (as the one-peak
+the best is taken, its peaks (reference and closing) are marked, and the next best of the
+hypotheses left that brings reference peaks of its own (more than half of them unmarked) is
+taken, up to ``max_sources``. Where two sources share a reference peak (they merge on that
+pair, within the main lobe 1/B) the shared delay is biased towards the other source; it is
+replaced by its closure estimate τ_rj = τ_ri + τ̂_ij through the channels i the source has to
+itself (eq. (C1); the median over them). The first is always kept (as the one-peak
 estimator always gives a row); the others only with a closure of at least ``min_closure``.
 Ties fall to the hypothesis with the smaller lags, so the result does not depend on the order
 in which the peaks are listed. Written on numpy: no library associates TDOA peaks this way.
@@ -47,6 +51,11 @@ class SourceHypotheses:
         than three channels.
     score : (H,) ndarray
         Σ ρ of the hypothesis's reference and closing peaks.
+    shared : (H, n_ch) ndarray of bool
+        The reference peak is also another hypothesis's (the sources overlap on that pair).
+    tau_closure : (H, n_ch) ndarray
+        Each delay from the closure instead, the median of τ_ri + τ̂_ij over the channels i
+        whose reference peak is not shared (NaN where none closes; eq. (C1)).
     """
 
     tau: np.ndarray
@@ -54,6 +63,8 @@ class SourceHypotheses:
     corr: np.ndarray
     closure: np.ndarray
     score: np.ndarray
+    shared: np.ndarray | None = None
+    tau_closure: np.ndarray | None = None
 
 
 def _reference_view(pairs: np.ndarray, tau: np.ndarray, reference: int, n_ch: int
@@ -74,8 +85,8 @@ def _reference_view(pairs: np.ndarray, tau: np.ndarray, reference: int, n_ch: in
 
 def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
                        pairs: np.ndarray, n_ch: int, reference: int, max_sources: int = 2,
-                       n_sigma: float = 4.0, floor: float = 2e-5, min_closure: float = 0.5
-                       ) -> SourceHypotheses:
+                       n_sigma: float = 4.0, floor: float = 2e-5, min_closure: float = 0.5,
+                       resolve_shared: bool = True) -> SourceHypotheses:
     """Source hypotheses of one snapshot from the peaks of every pair (module docstring).
 
     Parameters
@@ -94,6 +105,11 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
         Closure tolerance g (σ) and ε (s) of eq. (C2).
     min_closure : float
         Least closure of every hypothesis after the first.
+    resolve_shared : bool
+        A delay whose reference peak two hypotheses share (the sources merge on that pair,
+        and the peak lies between them) is replaced by its closure estimate ``tau_closure``
+        where there is one, with σ² = (π/2) v̄/k (the median of k closure paths of mean
+        variance v̄).
 
     Returns
     -------
@@ -152,7 +168,7 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
         # highest score; ties to the smaller lags (independent of the order of the peaks)
         keys = [t_ref[c_idx, q] for q in range(nr - 1, -1, -1)] + [-score[c_idx]]
         h = int(c_idx[np.lexsort(keys)[0]])
-        out.append((t_ref[h], s_ref[h], c_refs[h], frac[h], score[h]))
+        out.append((t_ref[h], s_ref[h], c_refs[h], frac[h], score[h], h))
         used[ridx, combo[h]] = True
         used[rest[closed[h]], close_col[h, closed[h]]] = True
         alive[h] = False
@@ -160,7 +176,38 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     T = np.zeros((H, n_ch))
     Sg = np.zeros((H, n_ch))
     Cr = np.ones((H, n_ch))
-    for i, (t, s, c, _, _) in enumerate(out):
+    for i, (t, s, c, _, _, _) in enumerate(out):
         T[i, others], Sg[i, others], Cr[i, others] = t, s, c
+    shared = np.zeros((H, n_ch), bool)
+    tc = np.full((H, n_ch), np.nan)
+    picks = np.array([combo[o[5]] for o in out]).reshape(H, nr)
+    for i, o in enumerate(out):
+        h = o[5]
+        sh = np.zeros(nr, bool)
+        for q in range(H):
+            if q != i:
+                sh |= picks[q] == picks[i]
+        shared[i, others] = sh
+        # τ_rj = τ_ri + τ_ij over the closing peaks of pairs (i, j), i unshared
+        est: list[list[float]] = [[] for _ in range(nr)]
+        var: list[list[float]] = [[] for _ in range(nr)]
+        for p_i in np.flatnonzero(closed[h]):
+            u, v = qa[p_i], qb[p_i]
+            lag = tau[rest[p_i], close_col[h, p_i]]       # τ_v − τ_u
+            v_l = sigma[rest[p_i], close_col[h, p_i]] ** 2
+            if not sh[u]:
+                est[v].append(t_ref[h, u] + lag)
+                var[v].append(s_ref[h, u] ** 2 + v_l)
+            if not sh[v]:
+                est[u].append(t_ref[h, v] - lag)
+                var[u].append(s_ref[h, v] ** 2 + v_l)
+        for q in range(nr):
+            if est[q]:
+                tc[i, others[q]] = float(np.median(est[q]))
+                if resolve_shared and sh[q]:
+                    # a median of k estimates: variance about (π/2) v̄ / k
+                    T[i, others[q]] = tc[i, others[q]]
+                    Sg[i, others[q]] = float(np.sqrt(0.5 * np.pi * np.mean(var[q])
+                                                     / len(var[q])))
     return SourceHypotheses(T, Sg, Cr, np.array([o[3] for o in out], float),
-                            np.array([o[4] for o in out], float))
+                            np.array([o[4] for o in out], float), shared, tc)
