@@ -13,9 +13,10 @@ inverse TDOA Fisher information at its true position
 (:func:`arrayproc.stages.delay.bounds.arrival_variance`,
 :func:`arrayproc.geo.tdoa.arrival_covariance`) with the other source counted as absent (so the
 ratio also measures what the interference costs); the same bound with the other source
-counted as white noise (SNR_s/(1 + SNR_other)) is given beside it. A control run of each source alone, through
-the one-peak estimator, gives the same ratio without interference. Every draw comes from one
-``numpy.random.default_rng(seed)`` per run (seeds ``seed``, ``seed + 1``, …).
+counted as white noise (SNR_s/(1 + SNR_other)) is given beside it. A control run of each
+source alone, through the one-peak estimator, gives the same ratio without interference.
+Every draw comes from one ``numpy.random.default_rng(seed)`` per run (seeds ``seed``,
+``seed + 1``, …).
 """
 
 from __future__ import annotations

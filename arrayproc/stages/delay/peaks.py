@@ -11,7 +11,8 @@ is computed in one batch (the spectra of :meth:`.gcc.GccEstimator.spectra`, one 
 inverse FFTs over all pairs and snapshots), its local maxima inside the physical window
 |τ_ab| ≤ |p_a − p_b|/c + margin found by :func:`._kernels.windowed_peaks`, every candidate
 refined to the maximum of the band-limited correlation (:func:`._kernels.refine_peaks`, the
-``interp = "fft"`` refinement of :mod:`.gcc`), and of the refined maxima the ``k`` highest
+``interp = "fft"`` refinement of :mod:`.gcc`; a maximum that ends on the window's edge is
+the slope of a peak outside it and is dropped), and of the refined maxima the ``k`` highest
 lying at least ``min_sep`` apart are kept (:func:`._kernels.distinct_peaks`; by default
 ``min_sep`` = 1/B, the width of the correlation's main lobe for a band of width B, so the
 carrier cycles of one source's peak are not taken for other sources). Each kept peak has
@@ -177,7 +178,9 @@ class PairPeakEstimator:
         tau, h, _ = refine_peaks(Gw, rows, g.freqs[0], g.df, np.clip(centre, lo, hi), lo, hi,
                                  self.n_iter, 1e-7 / g.fs)
         tau, h = tau.reshape(m, C), h.reshape(m, C)
-        ok = keep & (h > 0) & np.isfinite(tau)
+        # a maximum on the window's edge is the slope of a peak outside it, not a source
+        edge = np.abs(tau) >= lim_s.reshape(m, C) - 1e-3 / g.fs
+        ok = keep & (h > 0) & np.isfinite(tau) & ~edge
         sel = distinct_peaks(tau, h, ok, K, self.min_sep)
         got = sel >= 0
         rr = np.repeat(np.arange(m), K)[got.reshape(-1)]
