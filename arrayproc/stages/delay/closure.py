@@ -19,11 +19,14 @@ peaks) and its closure the fraction of the (n − 1)(n − 2)/2 triplets through
 All K^(n−1) hypotheses of a snapshot are scored at once (numpy over hypotheses × pairs × peaks);
 the best is taken, its peaks (reference and closing) are marked, and the next best of the
 hypotheses left that brings reference peaks of its own (more than half of them unmarked) is
-taken, up to ``max_sources``. Where two sources share a reference peak (they merge on that
+taken, scored on its unmarked peaks only (a peak an earlier source explains adds nothing), up
+to ``max_sources``. Where two sources share a reference peak (they merge on that
 pair, within the main lobe 1/B) the shared delay is biased towards the other source; it is
-replaced by its closure estimate τ_rj = τ_ri + τ̂_ij through the channels i the source has to
-itself (eq. (C1); the median over them). The first is always kept (as the one-peak
-estimator always gives a row); the others only with a closure of at least ``min_closure``.
+replaced by its closure estimate τ_rj = τ_ri + τ̂_ij through the channels i and the closing
+peaks the source has to itself (eq. (C1); the median over them), or, for a later source
+without such a path, left out (NaN delay, ρ = 0: the other source masks this channel). The
+first is always kept (as the one-peak estimator always gives a row); the others only with a
+closure of at least ``min_closure``.
 Ties fall to the hypothesis with the smaller lags, so the result does not depend on the order
 in which the peaks are listed. Written on numpy: no library associates TDOA peaks this way.
 """
@@ -55,7 +58,8 @@ class SourceHypotheses:
         The reference peak is also another hypothesis's (the sources overlap on that pair).
     tau_closure : (H, n_ch) ndarray
         Each delay from the closure instead, the median of τ_ri + τ̂_ij over the channels i
-        whose reference peak is not shared (NaN where none closes; eq. (C1)).
+        whose reference peak is not shared and the closing peaks no earlier source took (NaN
+        where none closes; eq. (C1)).
     """
 
     tau: np.ndarray
@@ -144,6 +148,7 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     implied = t_ref[:, qb] - t_ref[:, qa]                 # (M, nq)
     var_ref = s_ref[:, qa] ** 2 + s_ref[:, qb] ** 2
     used = np.zeros((P, K), bool)
+    owner = np.full((P, K), -1, np.int64)                 # first source that took each peak
     alive = np.ones(combo.shape[0], bool)
     out: list[tuple] = []
     nq = rest.size
@@ -160,17 +165,23 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     while alive.any() and len(out) < max_sources:
         # a further source must bring reference peaks of its own (not re-use the earlier's)
         new_ref = ~used[ridx[None, :], combo]
+        new_close = closed & ~used[rest[None, :], close_col]
+        # explaining away: a peak an earlier source took adds nothing to a later one's score
+        gain = (np.where(new_ref, c_refs, 0.0).sum(axis=1)
+                + np.where(new_close, c_close, 0.0).sum(axis=1))
         cand = alive & ((frac >= min_closure) & (new_ref.sum(axis=1) > 0.5 * nr)
                         if out else True)
         if not cand.any():
             break
         c_idx = np.flatnonzero(cand)
         # highest score; ties to the smaller lags (independent of the order of the peaks)
-        keys = [t_ref[c_idx, q] for q in range(nr - 1, -1, -1)] + [-score[c_idx]]
+        keys = [t_ref[c_idx, q] for q in range(nr - 1, -1, -1)] + [-gain[c_idx]]
         h = int(c_idx[np.lexsort(keys)[0]])
         out.append((t_ref[h], s_ref[h], c_refs[h], frac[h], score[h], h))
-        used[ridx, combo[h]] = True
-        used[rest[closed[h]], close_col[h, closed[h]]] = True
+        for rows_, cols_ in ((ridx, combo[h]), (rest[closed[h]], close_col[h, closed[h]])):
+            owner[rows_, cols_] = np.where(owner[rows_, cols_] < 0, len(out) - 1,
+                                           owner[rows_, cols_])
+            used[rows_, cols_] = True
         alive[h] = False
     H = len(out)
     T = np.zeros((H, n_ch))
@@ -192,6 +203,8 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
         est: list[list[float]] = [[] for _ in range(nr)]
         var: list[list[float]] = [[] for _ in range(nr)]
         for p_i in np.flatnonzero(closed[h]):
+            if owner[rest[p_i], close_col[h, p_i]] != i:  # another source's peak
+                continue
             u, v = qa[p_i], qb[p_i]
             lag = tau[rest[p_i], close_col[h, p_i]]       # τ_v − τ_u
             v_l = sigma[rest[p_i], close_col[h, p_i]] ** 2
@@ -202,6 +215,9 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
                 est[u].append(t_ref[h, v] - lag)
                 var[u].append(s_ref[h, v] ** 2 + v_l)
         for q in range(nr):
+            if sh[q] and not est[q] and owner[ridx[q], picks[i, q]] != i:
+                # another source's peak that none of this source's own peaks confirms
+                T[i, others[q]], Sg[i, others[q]], Cr[i, others[q]] = np.nan, np.inf, 0.0
             if est[q]:
                 tc[i, others[q]] = float(np.median(est[q]))
                 if resolve_shared and sh[q]:
