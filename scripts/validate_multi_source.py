@@ -82,8 +82,11 @@ def main() -> None:
                   f"(ratio {q.get('ratio_rmse_to_crlb', float('nan')):.2f}, to the bound with "
                   f"the other as noise {q.get('ratio_rmse_to_crlb_interference') or np.nan:.2f}"
                   f"; alone "
-                  f"{q['alone'].get('ratio_rmse_to_crlb', float('nan')):.2f}), delays "
-                  f"{q.get('delay_rmse_s', np.nan) * 1e6:.1f} us vs "
+                  f"{q['alone'].get('ratio_rmse_to_crlb', float('nan')):.2f}), delays RMS "
+                  f"{q.get('delay_rmse_s', np.nan) * 1e6:.1f} us (median |e| "
+                  f"{q.get('delay_median_abs_s', np.nan) * 1e6:.1f} us, "
+                  f"{q.get('delay_gross_errors', 0)} gross, {q.get('delays_left_out', 0)} "
+                  f"left out) vs bound "
                   f"{q.get('delay_crlb_rms_s', np.nan) * 1e6:.2f} us "
                   f"(other as noise {q.get('delay_crlb_interference_rms_s', np.nan) * 1e6:.1f})")
     rec, dl, tk = (str(out / n) for n in ("rec.h5", "del.h5", "trk.h5"))
