@@ -71,7 +71,7 @@ class SourceHypotheses:
     tau_closure: np.ndarray | None = None
 
 
-def _reference_view(pairs: np.ndarray, tau: np.ndarray, reference: int, n_ch: int
+def _reference_view(pairs: np.ndarray, reference: int, n_ch: int
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Index of pair (r, j) for each j ≠ r, the sign that turns its lag into τ_rj, and the
     other channels j."""
@@ -126,7 +126,7 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     pairs = np.asarray(pairs, np.int64)
     P, K = tau.shape
     ok = np.isfinite(tau) & np.isfinite(sigma) & np.isfinite(corr)
-    ridx, rsign, others = _reference_view(pairs, tau, reference, n_ch)
+    ridx, rsign, others = _reference_view(pairs, reference, n_ch)
     nr = others.size
     empty = SourceHypotheses(np.zeros((0, n_ch)), np.zeros((0, n_ch)), np.zeros((0, n_ch)),
                              np.zeros(0), np.zeros(0))
@@ -189,9 +189,26 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
     Cr = np.ones((H, n_ch))
     for i, (t, s, c, _, _, _) in enumerate(out):
         T[i, others], Sg[i, others], Cr[i, others] = t, s, c
+    picks = np.array([combo[o[5]] for o in out]).reshape(H, nr)
+    shared, tc = _resolve_shared(out, picks, T, Sg, Cr, tau, sigma, owner, closed, close_col,
+                                 rest, qa, qb, t_ref, s_ref, ridx, others, resolve_shared)
+    return SourceHypotheses(T, Sg, Cr, np.array([o[3] for o in out], float),
+                            np.array([o[4] for o in out], float), shared, tc)
+
+
+def _resolve_shared(out: list, picks: np.ndarray, T: np.ndarray, Sg: np.ndarray,
+                    Cr: np.ndarray, tau: np.ndarray, sigma: np.ndarray, owner: np.ndarray,
+                    closed: np.ndarray, close_col: np.ndarray, rest: np.ndarray,
+                    qa: np.ndarray, qb: np.ndarray, t_ref: np.ndarray, s_ref: np.ndarray,
+                    ridx: np.ndarray, others: np.ndarray, resolve_shared: bool
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The shared reference peaks of the hypotheses ``out`` and their closure estimates
+    (eq. (C1)); with ``resolve_shared`` the rows T, Sg, Cr are corrected in place (module
+    docstring). Returns (shared, tau_closure), (H, n_ch) each."""
+    H, nr = picks.shape
+    n_ch = T.shape[1]
     shared = np.zeros((H, n_ch), bool)
     tc = np.full((H, n_ch), np.nan)
-    picks = np.array([combo[o[5]] for o in out]).reshape(H, nr)
     for i, o in enumerate(out):
         h = o[5]
         sh = np.zeros(nr, bool)
@@ -225,5 +242,4 @@ def closure_hypotheses(tau: np.ndarray, sigma: np.ndarray, corr: np.ndarray,
                     T[i, others[q]] = tc[i, others[q]]
                     Sg[i, others[q]] = float(np.sqrt(0.5 * np.pi * np.mean(var[q])
                                                      / len(var[q])))
-    return SourceHypotheses(T, Sg, Cr, np.array([o[3] for o in out], float),
-                            np.array([o[4] for o in out], float), shared, tc)
+    return shared, tc
