@@ -88,3 +88,43 @@ def test_confirm_key_is_checked():
         check_delays_config({"type": "delays", "delays": {"confirm": [3, 2]}}, "t.toml")
     with pytest.raises(ConfigError, match="max_misses"):
         check_delays_config({"type": "delays", "delays": {"max_misses": -1}}, "t.toml")
+
+
+def test_arrayproc_track_on_two_sources_delays(tmp_path):
+    """A ``delays`` product with two rows per time (``tde`` peaks > 1) + the recording's /nav
+    → ``arrayproc track`` writes two confirmed tracks, one on each source."""
+    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.io.recording import RecordingWriter
+    from arrayproc.track.runner import run_tracker
+
+    fine = S.turn_track(dt=1.0)
+    pos = np.zeros((N_H, 3))
+    pos[:, 0] = -np.arange(N_H) * DX
+    rec = tmp_path / "rec.h5"
+    with RecordingWriter(rec, 100.0, N_H, positions=pos) as w:
+        w.append(np.zeros((10, N_H), np.float32))
+        w.set_nav(fine.time, fine.position, np.rad2deg(fine.heading) % 360.0)
+    tr, el = _geometry()
+    el[..., 2] = 0.0
+    tau2 = np.stack([np.stack([predicted_delays(np.r_[s, 0.0], el[b], 0, C)
+                               for b in range(el.shape[0])]) for s in SOURCES], 1)
+    prod = tmp_path / "del.h5"
+    with ProductsWriter(prod, source=str(rec)) as w:
+        g = w.group("tde", "delays", reference=0)
+        g.append(time=np.repeat(tr.time, 2), tau=tau2.reshape(-1, N_H),
+                 sigma=np.full((2 * tr.time.size, N_H), 1e-5),
+                 corr=np.ones((2 * tr.time.size, N_H)),
+                 source=np.tile([0, 1], tr.time.size), closure=np.ones(2 * tr.time.size))
+    cfg = tmp_path / "trk.toml"
+    cfg.write_text('[tracker]\ntype = "delays"\nfilter = "ukf"\n[tracker.delays]\n'
+                   'range_bank = [1000.0, 20000.0, 6]\ngate_prob = 0.9999\nconfirm = [3, 5]\n'
+                   'max_misses = 5\narray_motion = false\n')
+    out = tmp_path / "trk.h5"
+    run_tracker(str(prod), str(cfg), str(out))
+    g = read_products(str(out))["tracks"]
+    ids = np.asarray(g["track_id"])
+    conf = np.unique(ids[np.asarray(g["status"]) == 1])
+    assert conf.size == 2
+    ends = [np.flatnonzero(ids == i)[-1] for i in conf]
+    err = np.hypot(SOURCES[:, 0][:, None] - g["x"][ends], SOURCES[:, 1][:, None] - g["y"][ends])
+    assert sorted(np.argmin(err, axis=0)) == [0, 1] and err.min(axis=0).max() < 30.0
