@@ -231,6 +231,9 @@ class DelaysMeta:
         m/s.
     event : int
         Detection number, or -1 for a regular snapshot.
+    source : int
+        Source hypothesis of the row within its snapshot (``tde`` with ``peaks`` > 1), or -1
+        for the one-source row.
     """
 
     time: float
@@ -240,6 +243,7 @@ class DelaysMeta:
     elements: np.ndarray
     sound_speed: float
     event: int = -1
+    source: int = -1
 
 
 META_TYPES: dict[Domain, type] = {

@@ -162,3 +162,26 @@ def crlb(source: np.ndarray, elements: np.ndarray, reference: int, c: float,
         m².
     """
     return np.linalg.inv(fisher_information(source, elements, reference, c, cov))
+
+
+def arrival_covariance(variance: np.ndarray, reference: int) -> np.ndarray:
+    """Covariance of delays against one reference from each channel's arrival-time variance.
+
+    τ_i = e_i − e_ref with independent errors of variance v_i: var τ_i = v_i + v_ref,
+    cov(τ_i, τ_j) = v_ref (the known-shares form of :func:`reference_covariance`).
+
+    Parameters
+    ----------
+    variance : (n,) array
+        v_i of every channel, s² (e.g. :func:`arrayproc.stages.delay.bounds.arrival_variance`).
+    reference : int
+        Reference channel.
+
+    Returns
+    -------
+    (n−1, n−1) ndarray
+        s², channels in order without the reference.
+    """
+    v = np.asarray(variance, float)
+    rest = np.delete(v, reference)
+    return np.diag(rest) + v[reference]

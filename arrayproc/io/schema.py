@@ -165,13 +165,30 @@ _KINDS = [
                   trailing=_ANY),
         "sigma": _c("s", "1-sigma of each delay, (n, n_ch)", trailing=_ANY),
         "corr": _c("", "peak normalised correlation, (n, n_ch)", trailing=_ANY),
+        "source": _c("", "source hypothesis of the row within its snapshot, strongest first "
+                     "(tde peaks > 1: one row per source)", False, dtype="i8"),
+        "closure": _c("", "fraction of the channel triplets through the reference whose "
+                      "delays close (tde peaks > 1)", False),
     }),
+    Kind("delay_peaks", "the K strongest correlation peaks of every channel pair (tde "
+         "peaks > 1)", {
+        "time": _c("s", "centre time"),
+        "tau": _c("s", "lag of b after a per pair (a, b) and peak, (n, n_pairs, K); NaN "
+                  "where absent", trailing=_ANY2),
+        "sigma": _c("s", "1-sigma of each lag, (n, n_pairs, K)", trailing=_ANY2),
+        "corr": _c("", "normalised peak correlation, (n, n_pairs, K)", trailing=_ANY2),
+        "snr_db": _c("dB", "SNR read from the correlation as a coherence, (n, n_pairs, K)",
+                     trailing=_ANY2),
+    }, {"pairs": _c("", "channel pairs (a, b) of the pair axis, (n_pairs, 2)", dtype="i8",
+                    trailing=(2,))}),
     Kind("positions", "localised event", {
         "time": _c("s", "event time"),
         "x": _c("m", "east"), "y": _c("m", "north"), "z": _c("m", "down"),
         "cov": _c("m²", "position covariance, (n, 3, 3)", trailing=(3, 3)),
         "tdoa_rms_s": _c("s", "RMS of the TDOA residuals"),
         "n_used": _c("", "channel pairs used", dtype="i8"),
+        "source": _c("", "source hypothesis of the event's delays row (tde peaks > 1)",
+                     False, dtype="i8"),
     }),
     Kind("directions", "event localised in direction only (planar or line arrays)", {
         "time": _c("s", "event time"),

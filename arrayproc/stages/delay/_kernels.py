@@ -404,3 +404,52 @@ def cross_band(X, ref, out, energy):
                 out[row, k] = x * np.conj(r)
                 acc += float(x.real) * float(x.real) + float(x.imag) * float(x.imag)
             energy[s, c] = acc
+
+
+@njit(cache=True)
+def distinct_peaks(tau, height, ok, k, min_sep):
+    """The ``k`` highest peaks of each row that lie at least ``min_sep`` from every higher
+    kept peak (a refined correlation's maxima, several candidates of which may converge on
+    one lag, and whose carrier cycles around a peak are not other sources).
+
+    Parameters
+    ----------
+    tau, height : (m, c) float64
+        Lag (s) and height of each candidate of each row.
+    ok : (m, c) bool
+        Usable candidates.
+    k : int
+        Most peaks kept per row.
+    min_sep : float
+        Smallest distance (s) between two kept peaks of a row.
+
+    Returns
+    -------
+    (m, k) int64
+        Column of each kept peak, highest first; −1 in unused slots.
+    """
+    m, c = tau.shape
+    out = np.full((m, k), -1, np.int64)
+    taken = np.zeros(c, np.bool_)
+    for i in range(m):
+        taken[:] = False
+        n_kept = 0
+        while n_kept < k:
+            best = -1
+            for j in range(c):
+                if ok[i, j] and not taken[j] and (best < 0 or height[i, j] > height[i, best]
+                                                  or (height[i, j] == height[i, best]
+                                                      and tau[i, j] < tau[i, best])):
+                    best = j
+            if best < 0:
+                break
+            taken[best] = True
+            far = True
+            for q in range(n_kept):
+                if abs(tau[i, best] - tau[i, out[i, q]]) < min_sep:
+                    far = False
+                    break
+            if far:
+                out[i, n_kept] = best
+                n_kept += 1
+    return out

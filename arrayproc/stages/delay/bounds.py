@@ -56,3 +56,34 @@ def crlb(snr: np.ndarray | float, T: float, f_min: float, f_max: float) -> np.nd
     :func:`quazi_low` and :func:`quazi_high`. Parameters and return as :func:`quazi_low`."""
     s = np.asarray(snr, float)
     return np.sqrt(3.0 * (1.0 + 2.0 * s) / (8 * np.pi**2 * T * s**2 * _cube(f_min, f_max)))
+
+
+def arrival_variance(snr: np.ndarray | float, T: float, f_min: float, f_max: float
+                     ) -> np.ndarray:
+    """Each channel's share of the delay bound, for channels of unequal SNR.
+
+    A pair's bound splits into one share per channel, σ_ab² = v_a + v_b with
+
+        v_i = 3 (1 + 1/(2 SNR_i)) / (8π² T SNR_i (f_max³ − f_min³)),
+
+    exact (σ² = :func:`crlb`²) for equal SNRs and tending to the bound of the pair's coherence
+    γ² = SNR_a SNR_b/((1 + SNR_a)(1 + SNR_b)) at high SNR. Delays against one reference share
+    its v_ref (:func:`arrayproc.geo.tdoa.arrival_covariance`): the bound of one source's
+    delays when every channel has its own SNR (the other sources counted as absent).
+
+    Parameters
+    ----------
+    snr : float or array
+        Per-channel SNR (linear, in-band PSD ratio).
+    T : float
+        Observation time, s.
+    f_min, f_max : float
+        Band, Hz.
+
+    Returns
+    -------
+    ndarray
+        v_i, s².
+    """
+    s = np.asarray(snr, float)
+    return 3.0 * (1.0 + 0.5 / s) / (8 * np.pi**2 * T * s * _cube(f_min, f_max))

@@ -6,7 +6,9 @@ starts, covariance (Jᵀ J)⁻¹ = (Hᵀ C⁻¹ H)⁻¹ optionally scaled by the
 delays below ``min_corr`` rejected, events with fewer than ``min_pairs`` usable delays or a
 solution on the search box not localised. Products ``positions`` (docs/formats.md): ``time``,
 ``x``, ``y``, ``z`` (m, world frame x east, y north, z down), ``cov`` (n, 3, 3) m²,
-``tdoa_rms_s``, ``n_used``.
+``tdoa_rms_s``, ``n_used`` (and ``source``, the source index of the delays row, when the
+``tde`` stage keeps several peaks: each source of a snapshot is localised on its own, its
+covariance the inverse Fisher information of its own delays' σ).
 
 Planar and line arrays cannot fix a 3-D position: the stage falls back to the far-field
 direction (:func:`.localise.solve_direction`) and writes a group ``<name>_directions`` with
@@ -73,9 +75,10 @@ class Localise(Stage):
                     out = out or self.products("positions")
                     if out is not None:
                         p = sol.position
+                        extra = {} if m.source < 0 else {"source": np.array([m.source])}
                         out.append(time=np.array([m.time]), x=p[:1], y=p[1:2], z=p[2:3],
                                    cov=sol.cov[None], tdoa_rms_s=np.array([sol.tdoa_rms_s]),
-                                   n_used=np.array([sol.n_used]))
+                                   n_used=np.array([sol.n_used]), **extra)
             else:
                 got = solve_direction(b.data, m.sigma, m.corr, el, m.reference, m.sound_speed,
                                       self.min_corr)

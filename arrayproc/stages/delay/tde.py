@@ -10,6 +10,13 @@ correlation, as accurate below 0.4 fs and cheaper, for per-snapshot use; ``parab
 ``method = "unwrap"``: phase-unwrapping LLS, eqs. (3.30)-(3.36) with app. B (:mod:`.unwrap`).
 σ per delay from the peak's curvature and the normalised correlation (:func:`.gcc.delay_sigma`).
 
+Several sources at once (``peaks`` = K > 1, ``method = "xcorr"``): the K strongest peaks of
+every channel pair (:mod:`.peaks`, written as a ``<name>_peaks`` group of kind
+``delay_peaks`` with their σ, ρ and SNR), associated into sources by delay closure over the
+triplets through the reference (:mod:`.closure`); each source gives one ``delays`` row, with
+its ``source`` index (strongest first) and ``closure``. With K = 1 (the default) the rows are
+those of the one-peak estimator, bit for bit.
+
 Products ``delays`` (docs/formats.md): ``time`` (detection centre or snapshot centre, s),
 ``tau``, ``sigma`` (n, n_ch) s, ``corr`` (n, n_ch); group attr ``reference``. Yields one
 delays block per row (:mod:`._common`) for the ``localise`` stage.
@@ -28,7 +35,9 @@ from arrayproc.dsp.framing import FrameBuffer
 from arrayproc.errors import ConfigError
 
 from ._common import DELAYS, DelaysMeta
+from .closure import closure_hypotheses
 from .gcc import INTERPS, WEIGHTINGS, GccEstimator
+from .peaks import PAIR_WEIGHTINGS, PairPeakEstimator, all_pairs
 from .unwrap import UnwrapEstimator
 
 
@@ -56,6 +65,19 @@ class Tde(Stage):
                                   check=positive, unit="rad"),
         "unwrap_window": Param("int", 16, "app. B sliding window, bins", check=positive,
                                unit="bins"),
+        "peaks": Param("int", 1, "correlation peaks kept per channel pair; > 1: several "
+                       "sources per snapshot, associated by delay closure", check=positive),
+        "max_sources": Param("int", None, "most sources per snapshot (default: peaks)",
+                             check=positive),
+        "min_closure": Param("float", 0.7, "least fraction of closed triplets of every source "
+                             "after the first (peaks > 1)",
+                             check=lambda v: None if 0 <= v <= 1 else "must be in [0, 1]"),
+        "closure_sigmas": Param("float", 4.0, "closure tolerance in σ of the three delays "
+                                "(peaks > 1)", check=positive),
+        "closure_floor": Param("float", None, "added to the closure tolerance, s (default "
+                               "0.2/B, B the band's width; peaks > 1)", unit="s"),
+        "peak_separation": Param("float", None, "least lag between two peaks of a pair, s "
+                                 "(default 1/B; peaks > 1)", unit="s"),
     }
 
     def validate(self) -> None:
@@ -63,6 +85,16 @@ class Tde(Stage):
             raise ConfigError(f"stage {self.name!r}: key 'nfft': must be >= 16")
         if self.hop is not None and self.hop < 1:
             raise ConfigError(f"stage {self.name!r}: key 'hop': must be >= 1")
+        if self.peaks > 1:
+            if self.method != "xcorr":
+                raise ConfigError(f"stage {self.name!r}: key 'peaks': several peaks need "
+                                  "method = \"xcorr\"")
+            if self.weighting not in PAIR_WEIGHTINGS:
+                raise ConfigError(f"stage {self.name!r}: key 'weighting': several peaks take "
+                                  f"{', '.join(PAIR_WEIGHTINGS)}, not {self.weighting!r}")
+            if self.interp != "fft":
+                raise ConfigError(f"stage {self.name!r}: key 'interp': several peaks are "
+                                  "refined by \"fft\" only")
 
     def _estimator(self, n: int, fs: float, positions: np.ndarray):
         p = np.asarray(positions, float)
@@ -70,11 +102,23 @@ class Tde(Stage):
             raise ConfigError(f"stage {self.name!r}: key 'reference': {self.reference} outside "
                               f"0..{p.shape[0] - 1}")
         lim = np.linalg.norm(p - p[self.reference], axis=1) / self.ctx.sound_speed + self.margin
+        if self.peaks > 1:
+            pairs = all_pairs(p.shape[0])
+            lag = (np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
+                   / self.ctx.sound_speed + self.margin)
+            return PairPeakEstimator(n, fs, lag, pairs, p.shape[0], self.band, self.peaks,
+                                     self.weighting, self.peak_separation, self.smooth_bins)
         if self.method == "unwrap":
             return UnwrapEstimator(n, fs, self.reference, self.band, self.unwrap_threshold,
                                    self.unwrap_window, 20, lim)
         return GccEstimator(n, fs, p.shape[0], self.reference, self.band, lim, self.weighting,
                             self.interp, self.smooth_bins)
+
+    @staticmethod
+    def _run(est, frames: np.ndarray):
+        """Delays of the frames, or (peaks, estimator) for the several-source search."""
+        got = est(frames)
+        return (got, est) if isinstance(est, PairPeakEstimator) else got
 
     def _world(self, b: Block) -> np.ndarray:
         return b.pose.elements if b.pose is not None else np.asarray(b.positions, float)
@@ -88,7 +132,7 @@ class Tde(Stage):
                 if b.data.shape[0] < 16:
                     continue
                 e = self._estimator(b.data.shape[0], b.fs, b.positions)
-                d = e(b.data[None])
+                d = self._run(e, b.data[None])
                 t = np.array([0.5 * (b.meta.time_start + b.meta.time_end)])
                 yield from self._emit(out, t, d, b, b.meta.event)
                 continue
@@ -100,11 +144,28 @@ class Tde(Stage):
                 est = self._estimator(self.nfft, b.fs, b.positions)
             fr, starts = frames.push(b.data[: b.meta.n_valid], b.meta.sample0)
             if fr.shape[0]:
-                d = est(fr)
+                d = self._run(est, fr)
                 t = (starts + 0.5 * self.nfft) / b.fs
                 yield from self._emit(out, t, d, b, -1)
 
+    def _sources(self, t: np.ndarray, pk, est: PairPeakEstimator, n_ch: int):
+        """The source rows of every snapshot's peaks (:func:`.closure.closure_hypotheses`):
+        (time, tau, sigma, corr, source, closure) stacked over snapshots."""
+        g = est.gcc
+        floor = self.closure_floor if self.closure_floor is not None else 0.2 / g.band_width
+        rows = []
+        for i in range(t.size):
+            h = closure_hypotheses(pk.tau[i], pk.sigma[i], pk.corr[i], pk.pairs, n_ch,
+                                   self.reference, self.max_sources or self.peaks,
+                                   self.closure_sigmas, floor, self.min_closure)
+            H = h.tau.shape[0]
+            rows.append((np.full(H, t[i]), h.tau, h.sigma, h.corr, np.arange(H), h.closure))
+        return [np.concatenate(c) for c in zip(*rows, strict=True)] if rows else None
+
     def _emit(self, out, t, d, b: Block, event: int) -> Iterator[Block]:
+        if isinstance(d, tuple):  # (peaks, estimator): several sources per snapshot
+            yield from self._emit_sources(out, t, d[0], d[1], b, event)
+            return
         if out is not None:
             out.append(time=t, tau=d.tau, sigma=d.sigma, corr=d.corr)
         el = self._world(b)
@@ -112,4 +173,22 @@ class Tde(Stage):
             meta = DelaysMeta(float(t[i]), d.sigma[i], d.corr[i], self.reference, el,
                               self.ctx.sound_speed, event)
             yield Block(d.tau[i], DELAYS, float(t[i]), 0.0, b.fs,  # type: ignore[arg-type]
+                        b.positions, b.pose, index=b.index, meta=meta)
+
+    def _emit_sources(self, out, t, pk, est, b: Block, event: int) -> Iterator[Block]:
+        if self.ctx.products is not None:
+            g = self.ctx.products.group(f"{self.name}_peaks", "delay_peaks", self.name,
+                                        reference=self.reference, peaks=self.peaks)
+            g.set("pairs", pk.pairs)
+            g.append(time=t, tau=pk.tau, sigma=pk.sigma, corr=pk.corr, snr_db=pk.snr_db)
+        n_ch = pk.pairs.max() + 1 if pk.pairs.size else 1
+        tt, tau, sig, corr, src, clo = self._sources(t, pk, est, int(n_ch))
+        if out is not None and tt.size:
+            out.append(time=tt, tau=tau, sigma=sig, corr=corr, source=src.astype(np.int64),
+                       closure=clo)
+        el = self._world(b)
+        for i in range(tt.size):
+            meta = DelaysMeta(float(tt[i]), sig[i], corr[i], self.reference, el,
+                              self.ctx.sound_speed, event, int(src[i]))
+            yield Block(tau[i], DELAYS, float(tt[i]), 0.0, b.fs,  # type: ignore[arg-type]
                         b.positions, b.pose, index=b.index, meta=meta)

@@ -74,6 +74,13 @@ Config (``arrayproc track DELAYS.h5 -c TRACKER.toml``)::
     gate_prob = 0.0           # > 0: χ² gate on the innovations
     group = ""                # delays group (default: the only one)
     array_motion = true       # correct the delays for the array's motion (below)
+    confirm = [1, 1]          # several sources: M-of-N confirmation of a new track
+    max_misses = 0            # several sources: delete after this many scans without a row
+
+Several sources (:mod:`arrayproc.track.delays.sources`): a product with several rows at one
+time (``tde`` with ``peaks`` > 1) gives several tracks: every track is a bank as above, the
+rows of a scan are gated and assigned by global nearest neighbour, leftover rows start
+tentative tracks confirmed by ``confirm`` and deleted after ``max_misses`` empty scans.
 """
 
 from arrayproc.track.delays.config import (
@@ -85,6 +92,7 @@ from arrayproc.track.delays.config import (
 )
 from arrayproc.track.delays.initial import initial_hypotheses
 from arrayproc.track.delays.run import read_delays, run_delays
+from arrayproc.track.delays.sources import track_delay_sources
 from arrayproc.track.delays.tracker import observer_states, track_delays
 from arrayproc.track.models.static import StaticPosition
 from arrayproc.track.models.tdoa import RowTDOA
@@ -92,4 +100,4 @@ from arrayproc.track.models.tdoa import RowTDOA
 __all__ = ["StaticPosition", "RowTDOA", "DELAYS_DEFAULTS", "GAUSSIAN_FILTERS",
            "is_delays_config", "load_delays_config", "check_delays_config",
            "initial_hypotheses", "track_delays", "observer_states", "read_delays",
-           "run_delays"]
+           "run_delays", "track_delay_sources"]

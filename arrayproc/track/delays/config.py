@@ -32,6 +32,13 @@ def _range_bank(v: Any) -> str | None:
                             "integer n >= 2")
 
 
+def _m_of_n(v: Any) -> str | None:
+    ok = (isinstance(v, list) and len(v) == 2 and all(isinstance(a, int)
+                                                      and not isinstance(a, bool) for a in v)
+          and 1 <= v[0] <= v[1])
+    return None if ok else "must be [m, n], integers with 1 <= m <= n"
+
+
 #: the ``[tracker.delays]`` keys
 DELAYS_PARAMS = Schema({
     "motion": Param("str", "static", "static (thesis eq. 3.40, Φ = I) or cv",
@@ -59,6 +66,10 @@ DELAYS_PARAMS = Schema({
     "group": Param("str", "", "delays group (default: the only one)"),
     "range_bank": Param("any", None, "optional [r_min, r_max, n]: n range priors from r_min to "
                         "r_max instead of range_m", check=_range_bank),
+    "confirm": Param("any", [1, 1], "[m, n]: a track of several sources is confirmed with m "
+                     "rows in its first n scans ([1, 1]: at birth)", check=_m_of_n),
+    "max_misses": Param("int", 0, "a confirmed track is deleted after this many scans without "
+                        "a row (0: never)", check=_nonneg),
     "array_motion": Param("bool", True, "delays brought back to a static array's (the array "
                           "moves while the wavefront crosses it)"),
 }, "the recursive TDOA tracker ([tracker.delays] table)")

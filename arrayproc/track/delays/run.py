@@ -1,5 +1,9 @@
 """``arrayproc track DELAYS.h5 -c TRACKER.toml``: the delays rows of a products file and the
-recording's poses in, the recursive TDOA track out (a ``tracks`` group)."""
+recording's poses in, the recursive TDOA track out (a ``tracks`` group). A product with
+several rows at one time (a ``tde`` stage keeping several peaks: one row per source) is
+tracked by :func:`~arrayproc.track.delays.sources.track_delay_sources` (several tracks, each
+with its id and status); one row per time, by the one-source
+:func:`~arrayproc.track.delays.tracker.track_delays` (track 1)."""
 
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 from arrayproc.track.delays.config import load_delays_config
+from arrayproc.track.delays.sources import track_delay_sources
 from arrayproc.track.delays.tracker import track_delays
 
 __all__ = ["read_delays", "run_delays"]
@@ -61,8 +66,9 @@ def run_delays(products_path: str, config_path: str, out_path: str,
                progress: bool = False, cfg: dict[str, Any] | None = None
                ) -> dict[str, np.ndarray]:
     """``arrayproc track DELAYS.h5 -c TRACKER.toml -o TRACKS.h5`` with
-    ``measurements = "delays"``: one track (id 1) from every row, written as a ``tracks``
-    group (status confirmed; ``row`` the products row).
+    ``measurements = "delays"``: one track (id 1, confirmed) from every row, or with several
+    rows at one time the tracks of several sources (their ids and statuses), written as a
+    ``tracks`` group (``row`` the products row).
 
     Parameters
     ----------
@@ -112,10 +118,11 @@ def run_delays(products_path: str, config_path: str, out_path: str,
     if el.shape[:2] != meas["tau"].shape:
         raise FormatError(f"{products_path}: delays have {meas['tau'].shape[1]} channels but "
                           f"the recording {rec_path} has {el.shape[1]} active channels")
-    res = track_delays(t, meas["tau"], meas["sigma"], el, meas["reference"], c, d,
-                       cfg["filter"], cfg["params"],
-                       heading_rad=np.deg2rad([p.heading for p in poses]), corr=meas["corr"],
-                       array_velocity=vel)
+    several = bool(np.any(np.diff(t) == 0))  # several rows at one time: several sources
+    run = track_delay_sources if several else track_delays
+    res = run(t, meas["tau"], meas["sigma"], el, meas["reference"], c, d, cfg["filter"],
+              cfg["params"], heading_rad=np.deg2rad([p.heading for p in poses]),
+              corr=meas["corr"], array_velocity=vel)
     if progress:
         r = float(np.hypot(*res["rel"][-1]))
         print(f"delays tracker ({cfg['filter']}, {d['motion']}): {res['time'].size} rows, "
@@ -128,9 +135,14 @@ def run_delays(products_path: str, config_path: str, out_path: str,
                     filter=cfg["filter"], motion=d["motion"], lr=len(res["side"]) > 1,
                     array_motion=bool(d["array_motion"]),
                     sides=",".join(res["side"]))
-        g.append(time=res["time"], track_id=np.ones(n, np.int64), x=res["x"], y=res["y"],
-                 vx=res["vx"], vy=res["vy"], cov=res["cov"],
-                 status=np.full(n, STATUS_CODES[Status.CONFIRMED.value], np.int8),
+        if several:
+            ids = res["track_id"]
+            status = np.array([STATUS_CODES[s] for s in res["status"]], np.int8)
+        else:
+            ids = np.ones(n, np.int64)
+            status = np.full(n, STATUS_CODES[Status.CONFIRMED.value], np.int8)
+        g.append(time=res["time"], track_id=ids, x=res["x"], y=res["y"],
+                 vx=res["vx"], vy=res["vy"], cov=res["cov"], status=status,
                  side_weight=res["side_weight"], own_x=res["own"][:, 0],
                  own_y=res["own"][:, 1],
                  row=np.where(res["updated"], meas["order"][res["row"]], -1).astype(np.int64))
