@@ -89,6 +89,21 @@ def geometry(line: Sequence[float] | None = None, geometry_file: str | None = No
     return None
 
 
+def add_calibration_options(p: argparse.ArgumentParser) -> None:
+    """``--sensitivity DB`` / ``--response CSV``, ``--gain DB``, ``--full-scale-volts V``: the
+    samples of an import in pascals (:mod:`arrayproc.io.calibration`)."""
+    p.add_argument("--sensitivity", type=float, default=None, metavar="DB",
+                   help="hydrophone sensitivity, dB re 1 V/µPa (e.g. -170): samples stored in "
+                        "Pa, levels in dB re 1 µPa; needs --full-scale-volts")
+    p.add_argument("--gain", type=float, default=None, metavar="DB",
+                   help="gain between hydrophone and recorder, dB (default 0)")
+    p.add_argument("--full-scale-volts", type=float, default=None, metavar="V",
+                   help="voltage of the recorder's full scale (sample value 1), V")
+    p.add_argument("--response", default=None, metavar="CSV",
+                   help="frequency response instead of --sensitivity: CSV rows of freq_hz, "
+                        "sensitivity_db (re 1 V/µPa), corrected as a filter")
+
+
 def add_geometry_options(p: argparse.ArgumentParser) -> None:
     """``--line N SPACING`` / ``--geometry FILE`` (mutually exclusive)."""
     g = p.add_mutually_exclusive_group()

@@ -1,0 +1,84 @@
+"""Audio files other than WAV (FLAC, AIFF, CAF, W64, …) read through ``soundfile``
+(libsndfile), and the one entry the import uses for every audio file.
+
+WAV files keep their hand-written reader (:mod:`arrayproc.io.wav`): it reads truncated files
+and the RF64/streamed headers of field recorders and says what it found, which libsndfile
+refuses or hides. Every other format goes to libsndfile, which decodes FLAC and AIFF (and what
+else it knows) to floats in full scale; ``soundfile`` is an optional dependency (extra
+``labelled``) and is imported only for those files.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from arrayproc.errors import FormatError
+from arrayproc.io.wav import WavInfo, read_wav_frames, read_wav_info
+
+#: File name endings read by the hand-written WAV reader; the rest go to libsndfile.
+WAV_SUFFIXES = (".wav", ".wave")
+
+_BITS = {"PCM_S8": 8, "PCM_U8": 8, "PCM_16": 16, "PCM_24": 24, "PCM_32": 32, "FLOAT": 32,
+         "DOUBLE": 64}
+
+
+@dataclass
+class SoundfileInfo:
+    """What libsndfile says of an audio file, with the fields of :class:`WavInfo` the import
+    uses (rate, channels, sample format, frames)."""
+
+    path: Path
+    fs: int
+    n_channels: int
+    bits: int
+    is_float: bool
+    n_frames: int
+    format: str
+    missing_frames: int = 0
+
+    @property
+    def kind(self) -> str:
+        return f"{self.format} {self.bits}-bit {'float' if self.is_float else 'PCM'}"
+
+
+def _soundfile():
+    try:
+        import soundfile
+    except ImportError:  # pragma: no cover - the extra is not installed
+        raise FormatError("reading FLAC, AIFF and other non-WAV audio needs the soundfile "
+                          "package (pip install 'arrayproc[labelled]')") from None
+    return soundfile
+
+
+def audio_info(path: str | os.PathLike) -> WavInfo | SoundfileInfo:
+    """The header of any audio file: WAV by :func:`arrayproc.io.wav.read_wav_info`, every
+    other format by libsndfile (FormatError when it cannot read it)."""
+    p = Path(path)
+    if p.suffix.lower() in WAV_SUFFIXES:
+        return read_wav_info(p)
+    if not p.is_file():
+        raise FormatError(f"{p}: no such audio file")
+    sf = _soundfile()
+    try:
+        i = sf.info(str(p))
+    except (RuntimeError, sf.LibsndfileError) as e:
+        raise FormatError(f"{p}: not an audio file libsndfile reads ({e})") from None
+    if i.frames <= 0 or i.channels < 1 or i.samplerate < 1:
+        raise FormatError(f"{p}: audio file has {i.frames} frames, {i.channels} channels at "
+                          f"{i.samplerate} Hz")
+    return SoundfileInfo(p, int(i.samplerate), int(i.channels), _BITS.get(i.subtype, 0),
+                         i.subtype in ("FLOAT", "DOUBLE"), int(i.frames), str(i.format))
+
+
+def read_frames(info: WavInfo | SoundfileInfo, start: int, count: int) -> np.ndarray:
+    """Frames [start, start + count) as float64 fractions of full scale, (count, channels)."""
+    if isinstance(info, WavInfo):
+        return read_wav_frames(info, start, count)
+    count = max(0, min(count, info.n_frames - start))
+    sf = _soundfile()
+    return sf.read(str(info.path), frames=count, start=start, dtype="float64",
+                   always_2d=True)[0]
