@@ -161,7 +161,8 @@ def _run_export(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     n = export(args.files, args.to, args.output, origin=tuple(args.origin))
     audio = [audio_seconds(f) for f in args.files]
-    done(args.output, f"{n} {'selections' if args.to == 'raven' else 'lines'}",
+    unit = {"raven": "selections", "rep": "lines"}.get(args.to, "groups")
+    done(args.output, f"{n} {unit}",
          sum(audio) if all(a is not None for a in audio) else None)
     return 0
 
@@ -270,12 +271,14 @@ def _add_tma(sub: Any) -> None:
 
 
 def _add_export(sub: Any) -> None:
-    s = sub.add_parser("export", help="write Raven selection tables or Debrief REP files")
+    s = sub.add_parser("export", help="write Raven selection tables, Debrief REP files, or "
+                       "NetCDF4/Zarr labelled arrays")
     s.add_argument("files", nargs="+", help="products files (raven: in time order) or one "
-                   "tracks file (rep)")
-    s.add_argument("--to", required=True, choices=("raven", "rep"),
-                   help="raven: selection table; rep: Debrief replay file")
-    add_output(s, "text file to write")
+                   "tracks file (rep), one products or tracks file (netcdf, zarr)")
+    s.add_argument("--to", required=True, choices=("raven", "rep", "netcdf", "zarr"),
+                   help="raven: selection table; rep: Debrief replay file; netcdf: NetCDF4 "
+                        "file, zarr: Zarr store, one group per products group")
+    add_output(s, "file to write (a directory for zarr)")
     s.add_argument("--origin", type=float, nargs=2, default=(0.0, 0.0),
                    metavar=("LAT", "LON"), help="rep: latitude/longitude of x = y = 0 (deg)")
     add_quiet(s)
