@@ -1,14 +1,15 @@
 """Products and recordings as labelled arrays: ``xarray.Dataset`` and ``pandas.DataFrame``.
 
 Every products group becomes one ``xarray.Dataset`` (:func:`group_dataset`): its columns are
-data variables whose first dimension is the row (``time`` for the kinds ``power``,
-``btr``, ``lofar`` and ``delays``, whose rows are snapshots; ``obs`` for every other kind, as CF names the observations of a table), its
-trailing dimensions are named by the kind's axes when one labels them (``cone_deg``, ``freq``,
-``range_rate_mps``, ``range_m``) and otherwise by the schema's ``dims`` (``channel``,
-``state_i``/``state_j``, ``axis_i``/``axis_j``). The axes are coordinates. A beam dimension is
-``cone_deg`` for cone beams; for the 3-D and relative-bearing fans (group attribute
-``beam_mode`` ``"3d"`` or ``"lr"``, where ``cone_deg`` holds relative bearings, repeated for
-each elevation) it is ``beam``, with ``cone_deg`` and ``elevation_deg`` as coordinates on it.
+data variables whose first dimension is the row (``time`` for the kinds ``power``, ``btr``,
+``lofar`` and ``delays``, whose rows are snapshots; ``obs``, as CF names the observations of a
+table, for every other kind), its trailing dimensions are named by the kind's axes when one
+labels them (``cone_deg``, ``freq``, ``range_rate_mps``, ``range_m``) and otherwise by the
+schema's ``dims`` (``channel``, ``state_i``/``state_j``, ``axis_i``/``axis_j``). The axes are
+coordinates. A beam dimension is ``cone_deg`` for cone beams; for the 3-D and
+relative-bearing fans (group attribute ``beam_mode`` ``"3d"`` or ``"lr"``, where ``cone_deg``
+holds relative bearings, repeated for each elevation) it is ``beam``, with ``cone_deg`` and
+``elevation_deg`` as coordinates on it.
 Each variable carries ``units`` and ``long_name`` from :mod:`arrayproc.io.schema`, levels in
 the unit of the file's samples (``dB re 1 µPa`` or ``dB re FS``, :mod:`arrayproc.io.units`);
 the group's attributes and the file's root attributes (``source``, ``chain``, ``units``, …)
