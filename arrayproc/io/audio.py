@@ -82,3 +82,51 @@ def read_frames(info: WavInfo | SoundfileInfo, start: int, count: int) -> np.nda
     sf = _soundfile()
     return sf.read(str(info.path), frames=count, start=start, dtype="float64",
                    always_2d=True)[0]
+
+
+def write_beam_wav(path: str | os.PathLike, samples: np.ndarray, fs: float,
+                   peak_dbfs: float = -1.0, units: str = "Pa", what: str = "") -> float:
+    """Write a beam (or any mono series) as a 24-bit WAV normalised to ``peak_dbfs``,
+    atomically (:mod:`arrayproc.io.atomic`).
+
+    The scale is written in the file's comment (``1 FS = X Pa``), so levels can be read back
+    from the WAV; a silent series is written as zeros.
+
+    Parameters
+    ----------
+    path : str or path-like
+        WAV file.
+    samples : (n,) array
+        The series, in ``units``.
+    fs : float
+        Sample rate, Hz (rounded to a whole number, as WAV stores it).
+    peak_dbfs : float
+        Peak of the written samples, dB re full scale (≤ 0).
+    units : str
+        Unit of ``samples`` (``"Pa"``, ``"FS"``), for the comment.
+    what : str
+        What the series is (``cone 60 deg``), for the comment.
+
+    Returns
+    -------
+    float
+        Units per full scale of the written file (the normalisation).
+    """
+    from arrayproc.io.atomic import check_stop, commit, discard, temporary_sibling
+    sf = _soundfile()
+    y = np.asarray(samples, np.float64).reshape(-1)
+    peak = float(np.max(np.abs(y))) if y.size else 0.0
+    per_fs = peak / 10.0 ** (peak_dbfs / 20.0) if peak > 0 else 1.0
+    tmp = temporary_sibling(path)
+    try:
+        with sf.SoundFile(str(tmp), "w", samplerate=int(round(fs)), channels=1,
+                          format="WAV", subtype="PCM_24") as f:
+            f.comment = (f"arrayproc beam{': ' + what if what else ''}; 1 FS = {per_fs:.6g} "
+                         f"{units}")
+            f.write(y / per_fs)
+        check_stop()
+        commit(tmp, path)
+    except BaseException:
+        discard(tmp)
+        raise
+    return per_fs

@@ -241,7 +241,7 @@ def open_products(path: str | os.PathLike, lazy: bool | None = None,
         :data:`LAZY_BYTES` (None, the default).
     tables : {"pandas", "xarray"}
         Tables as ``pandas.DataFrame`` (default) or as ``xarray.Dataset`` with dimension
-        ``obs`` (what :func:`arrayproc.io.array_exports.write_netcdf` writes).
+        ``obs`` (what :func:`arrayproc.io.array_exports.write_arrays` writes).
 
     Returns
     -------
