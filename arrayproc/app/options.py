@@ -2,7 +2,8 @@
 every command (a test walks the parser: tests/app/test_cli_flags.py):
 
 * ``-q, --quiet``: print nothing on stdout; errors and warnings still go to stderr and the exit
-  status tells the outcome (every command has it);
+  status tells the outcome (every command has it); ``-v, --verbose``: the package's debug
+  log records on stderr too (:mod:`arrayproc.app.logs`);
 * ``-c, --config``: the configuration file the command runs (a chain, a tracker, a TMA
   configuration; ``--chain`` is an alias where a chain is meant);
 * ``-o, --output``: the file or folder to write;
@@ -21,6 +22,7 @@ if TYPE_CHECKING:
     import numpy as np
 
 QUIET_HELP = "print nothing on stdout (errors and warnings still go to stderr)"
+VERBOSE_HELP = "log more on stderr: debug detail as well as information (logging)"
 
 
 def finite(v: float) -> bool:
@@ -29,8 +31,11 @@ def finite(v: float) -> bool:
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:
-    """``-q, --quiet`` with its one meaning (:data:`QUIET_HELP`)."""
+    """``-q, --quiet`` with its one meaning (:data:`QUIET_HELP`), and ``-v, --verbose``
+    (:data:`VERBOSE_HELP`): the levels of the package's logging (:mod:`arrayproc.app.logs`;
+    ``-q`` also keeps information off stderr)."""
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
+    p.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
 
 
 def add_no_progress(p: argparse.ArgumentParser) -> None:

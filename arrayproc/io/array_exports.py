@@ -16,6 +16,7 @@ The output is built under a temporary name beside the target and renamed when co
 
 from __future__ import annotations
 
+import logging
 import os
 import shutil
 from pathlib import Path
@@ -32,6 +33,7 @@ from arrayproc.io.schema import KINDS
 from arrayproc.io.text import as_text
 
 FORMATS = ("netcdf", "zarr")
+_log = logging.getLogger(__name__)
 
 
 def _encodable(ds: Any) -> Any:
@@ -64,6 +66,8 @@ def _write(f: h5py.File, tmp: Path, to: str) -> int:
     for name in names:
         check_stop()
         ds = _encodable(group_dataset(f, name, lazy=None))
+        _log.debug(f"{to}: group {name} ({ds.attrs.get('kind', '')}): "
+                   f"{dict(ds.sizes)}")
         if to == "netcdf":
             ds.to_netcdf(tmp, mode="a", group=name, engine="h5netcdf")
         else:

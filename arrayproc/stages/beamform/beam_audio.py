@@ -31,6 +31,7 @@ per sample: an hour at 48 kHz is 0.7 GB).
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Iterator
 from typing import Any
@@ -45,6 +46,8 @@ from arrayproc.dsp.bands import check_nyquist
 from arrayproc.dsp.shading import KINDS as SHADINGS
 from arrayproc.dsp.shading import shading_weights
 from arrayproc.errors import ConfigError
+
+_log = logging.getLogger(__name__)
 
 #: Taps on each side of the fractional-delay kernel (module doc), and its Kaiser β.
 HALF_WIDTH, KAISER_BETA = 16, 8.0
@@ -174,6 +177,8 @@ def delay_sum_for(positions: np.ndarray, fs: float, sound_speed: float,
         if not (0 <= band[0] < band[1]):
             raise ConfigError(f"band [{band[0]:g}, {band[1]:g}] Hz: need 0 <= lo < hi")
     tau = steering_advances(positions, direction, mode, sound_speed)
+    _log.debug(f"beam: delays {tau.min() * fs:+.3f} to {tau.max() * fs:+.3f} samples over "
+               f"{tau.size} elements, shading {shading}")
     return DelaySum(tau, shading_weights(shading, positions, sidelobe_db), fs, band)
 
 

@@ -3,8 +3,8 @@ recording's poses in, the recursive TDOA track out (a ``tracks`` group)."""
 
 from __future__ import annotations
 
+import logging
 import os
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +16,8 @@ from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 from arrayproc.track.delays.config import load_delays_config
 from arrayproc.track.delays.tracker import track_delays
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["read_delays", "run_delays"]
 
@@ -118,8 +120,8 @@ def run_delays(products_path: str, config_path: str, out_path: str,
                        array_velocity=vel)
     if progress:
         r = float(np.hypot(*res["rel"][-1]))
-        print(f"delays tracker ({cfg['filter']}, {d['motion']}): {res['time'].size} rows, "
-              f"{int(res['updated'].sum())} updates, final range {r:.1f} m", file=sys.stderr)
+        _log.info(f"delays tracker ({cfg['filter']}, {d['motion']}): {res['time'].size} rows, "
+                  f"{int(res['updated'].sum())} updates, final range {r:.1f} m")
     n = res["time"].size
     cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
     with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,
