@@ -3,7 +3,8 @@
 Each products group is written as the ``xarray.Dataset`` of
 :func:`arrayproc.io.labelled.group_dataset` (named dimensions, coordinates, ``units`` and
 ``long_name`` on every variable, the group's attributes), through xarray's own writers
-(``h5netcdf`` for NetCDF4, ``zarr``); the root group holds the products file's attributes
+(``h5netcdf`` for NetCDF4, ``zarr`` in Zarr format 2 with consolidated metadata); the root
+group holds the products file's attributes
 (``source``, ``chain``, ``units``, ``format`` …) and a ``groups`` attribute listing the groups
 in file order. Text columns (``waveform``, ``method``) are written as strings, flags
 (``moving``) as xarray encodes booleans. Read back with ``xarray.open_dataset(OUT,
@@ -18,7 +19,6 @@ from __future__ import annotations
 
 import logging
 import os
-import shutil
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +33,9 @@ from arrayproc.io.schema import KINDS
 from arrayproc.io.text import as_text
 
 FORMATS = ("netcdf", "zarr")
+#: Zarr format 2: what every Zarr implementation reads, with consolidated metadata (which
+#: format 3 does not specify yet).
+ZARR_FORMAT = 2
 _log = logging.getLogger(__name__)
 
 
@@ -62,7 +65,7 @@ def _write(f: h5py.File, tmp: Path, to: str) -> int:
     if to == "netcdf":
         root.to_netcdf(tmp, mode="w", engine="h5netcdf")
     else:
-        root.to_zarr(tmp, mode="w", consolidated=False)
+        root.to_zarr(tmp, mode="w", consolidated=False, zarr_format=ZARR_FORMAT)
     for name in names:
         check_stop()
         ds = _encodable(group_dataset(f, name, lazy=None))
@@ -71,17 +74,15 @@ def _write(f: h5py.File, tmp: Path, to: str) -> int:
         if to == "netcdf":
             ds.to_netcdf(tmp, mode="a", group=name, engine="h5netcdf")
         else:
-            ds.to_zarr(tmp, mode="a", group=name, consolidated=False)
+            ds.to_zarr(tmp, mode="a", group=name, consolidated=False, zarr_format=ZARR_FORMAT)
     if to == "zarr":  # one metadata read for readers (xarray tries it first)
         import zarr
-        zarr.consolidate_metadata(str(tmp))
+        zarr.consolidate_metadata(str(tmp), zarr_format=ZARR_FORMAT)
     return len(names)
 
 
 def _remove(p: Path) -> None:
-    if p.is_dir() and not p.is_symlink():
-        shutil.rmtree(p, ignore_errors=True)
-    discard(p)
+    discard(p)  # a file or a store's directory
 
 
 def write_arrays(products: str | os.PathLike, output: str | os.PathLike, to: str) -> int:
