@@ -8,7 +8,7 @@ chosen one and turns what can go wrong into one line on stderr:
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
 * Python warnings (e.g. a diverging track): ``arrayproc: warning: …``; the package's log
-  records (:mod:`logging`) one per line on stderr at the level ``-q`` / ``-v`` set
+  records (Python logging) one per line on stderr at the level ``-q`` / ``-v`` set
   (:mod:`arrayproc.app.logs`);
 * a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time, peak M MB`` on
   stdout, unless ``-q`` (:mod:`arrayproc.app.progress`);

@@ -1,4 +1,4 @@
-"""The command line's logging: the package logs through :mod:`logging` (one logger per
+"""The command line's logging: the package logs through Python logging (one logger per
 module, under ``arrayproc``), and ``arrayproc`` shows those records on stderr.
 
 Levels: ``-q`` warnings and errors only; by default also ``INFO`` (what a long command says
