@@ -111,3 +111,22 @@ def test_a_response_sheet_corrects_each_frequency(tmp_path):
     assert y.shape == (n, 1)
     mid = slice(2000, n - 2000)  # away from the filter's start-up at both ends
     assert np.max(np.abs(y[mid, 0] - p[mid])) < 1e-3 * np.max(np.abs(p))
+
+
+def test_a_response_sheet_through_the_cli_reads_the_same_120_db(tmp_path):
+    """The sheet's sensitivity at the tone is the stated one (−170 dB; −160 dB far above):
+    the level after `import --response` is 120 dB re 1 µPa too."""
+    src = _recorded_tone(tmp_path / "tone.flac", "FLAC", "PCM_24")
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_text("freq_hz,sensitivity_db\n10,-170\n1500,-170\n3000,-160\n",
+                     encoding="utf-8")
+    rec, prod = tmp_path / "rec.h5", tmp_path / "p.h5"
+    assert main(["import", str(src), "-o", str(rec), "--line", "2", "0.5", "--response",
+                 str(sheet), "--gain", str(GAIN), "--full-scale-volts", str(VFS), "-q"]) == 0
+    with Recording(rec) as r:
+        assert r.n_samples == int(4.0 * FS)  # the FIR's delay removed, the length kept
+        assert "frequency response sheet.csv" in r._td.attrs["calibration"]
+    assert main(["process", str(rec), "-c", str(_power_chain(tmp_path)), "-o", str(prod),
+                 "-q", "--no-progress"]) == 0
+    level = read_products(prod)["power"]["power_db"]
+    assert np.all(np.abs(level[1:-1] - 120.0) < 0.1), level  # inner blocks: no start-up
