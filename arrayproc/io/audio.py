@@ -1,7 +1,8 @@
 """Audio files other than WAV (FLAC, AIFF, CAF, W64, …) read through ``soundfile``
-(libsndfile), and the one entry the import uses for every audio file.
+(libsndfile), and the beam WAVs of ``arrayproc listen`` written through it.
 
-WAV files keep their hand-written reader (:mod:`arrayproc.io.wav`): it reads truncated files
+WAV files keep their hand-written reader (:mod:`arrayproc.io.wav`, which sends every other
+file here, :func:`arrayproc.io.wav.audio_info`): it reads truncated files
 and the RF64/streamed headers of field recorders and says what it found, which libsndfile
 refuses or hides. Every other format goes to libsndfile, which decodes FLAC and AIFF (and what
 else it knows) to floats in full scale; ``soundfile`` is an optional dependency (extra
@@ -17,10 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from arrayproc.errors import FormatError
-from arrayproc.io.wav import WavInfo, read_wav_frames, read_wav_info
-
-#: File name endings read by the hand-written WAV reader; the rest go to libsndfile.
-WAV_SUFFIXES = (".wav", ".wave")
 
 _BITS = {"PCM_S8": 8, "PCM_U8": 8, "PCM_16": 16, "PCM_24": 24, "PCM_32": 32, "FLOAT": 32,
          "DOUBLE": 64}
@@ -28,8 +25,9 @@ _BITS = {"PCM_S8": 8, "PCM_U8": 8, "PCM_16": 16, "PCM_24": 24, "PCM_32": 32, "FL
 
 @dataclass
 class SoundfileInfo:
-    """What libsndfile says of an audio file, with the fields of :class:`WavInfo` the import
-    uses (rate, channels, sample format, frames)."""
+    """What libsndfile says of an audio file, with the fields of
+    :class:`arrayproc.io.wav.WavInfo` the import uses (rate, channels, sample format,
+    frames)."""
 
     path: Path
     fs: int
@@ -54,12 +52,9 @@ def _soundfile():
     return soundfile
 
 
-def audio_info(path: str | os.PathLike) -> WavInfo | SoundfileInfo:
-    """The header of any audio file: WAV by :func:`arrayproc.io.wav.read_wav_info`, every
-    other format by libsndfile (FormatError when it cannot read it)."""
+def soundfile_info(path: str | os.PathLike) -> SoundfileInfo:
+    """The header of an audio file libsndfile reads (FormatError when it cannot)."""
     p = Path(path)
-    if p.suffix.lower() in WAV_SUFFIXES:
-        return read_wav_info(p)
     if not p.is_file():
         raise FormatError(f"{p}: no such audio file")
     sf = _soundfile()
@@ -74,10 +69,8 @@ def audio_info(path: str | os.PathLike) -> WavInfo | SoundfileInfo:
                          i.subtype in ("FLOAT", "DOUBLE"), int(i.frames), str(i.format))
 
 
-def read_frames(info: WavInfo | SoundfileInfo, start: int, count: int) -> np.ndarray:
+def soundfile_frames(info: SoundfileInfo, start: int, count: int) -> np.ndarray:
     """Frames [start, start + count) as float64 fractions of full scale, (count, channels)."""
-    if isinstance(info, WavInfo):
-        return read_wav_frames(info, start, count)
     count = max(0, min(count, info.n_frames - start))
     sf = _soundfile()
     return sf.read(str(info.path), frames=count, start=start, dtype="float64",

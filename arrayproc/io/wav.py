@@ -15,6 +15,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -129,6 +130,27 @@ def read_wav_frames(info: WavInfo, start: int, count: int) -> np.ndarray:
     return x.reshape(count, info.n_channels)
 
 
+#: File name endings read by this module's WAV reader; the rest go to libsndfile.
+WAV_SUFFIXES = (".wav", ".wave")
+
+
+def audio_info(path: str | os.PathLike) -> Any:
+    """The header of any audio file: WAV by :func:`read_wav_info`, every other format by
+    libsndfile (:func:`arrayproc.io.audio.soundfile_info`)."""
+    if Path(path).suffix.lower() in WAV_SUFFIXES:
+        return read_wav_info(path)
+    from arrayproc.io.audio import soundfile_info
+    return soundfile_info(path)
+
+
+def read_frames(info: Any, start: int, count: int) -> np.ndarray:
+    """Frames [start, start + count) of any audio file as float64 fractions of full scale."""
+    if isinstance(info, WavInfo):
+        return read_wav_frames(info, start, count)
+    from arrayproc.io.audio import soundfile_frames
+    return soundfile_frames(info, start, count)
+
+
 def _name_key(name: str) -> list[tuple[int, int, str]]:
     """Natural sort key of a file name: text runs compared as text, digit runs as numbers."""
     return [(1, int(t), t) if t.isdigit() else (0, 0, t) for t in re.split(r"(\d+)", name)]
@@ -189,8 +211,8 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                 sound_speed: float = 1500.0, start_time: str | None = None,
                 chunk: int = 1 << 16, warn: Callable[[str], None] | None = None,
                 calibration: Calibration | None = None) -> dict:
-    """Write audio recordings (WAV; FLAC, AIFF and the rest through
-    :func:`arrayproc.io.audio.audio_info`) as one recording file; returns a summary dict.
+    """Write audio recordings (WAV; FLAC, AIFF and the rest through :func:`audio_info`) as
+    one recording file; returns a summary dict.
 
     Several files are taken as one mono (or multichannel) stream each, concatenated along
     channels in the natural order of their names (:func:`channel_order`, with a notice when
@@ -201,7 +223,6 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
     or a frequency-response sheet), which is also written as the ``/time_data`` attribute
     ``calibration``.
     """
-    from arrayproc.io.audio import audio_info, read_frames
     if not paths:
         raise FormatError("import: no audio files given")
     paths, notice = channel_order(paths)
