@@ -8,7 +8,7 @@
 PYTHON    ?= python3
 # A Python 3.10 for test-oldest: on the PATH, or one that pyenv installed.
 PYTHON310 ?= $(shell for p in python3.10 $$(ls -d $${PYENV_ROOT:-$$HOME/.pyenv}/versions/3.10*/bin/python3.10 2>/dev/null) /usr/bin/python3.10; do $$p -c 'import sys; assert sys.version_info[:2] == (3, 10)' 2>/dev/null && { echo $$p; break; }; done)
-EXTRAS    := test,fast,dask,stonesoup
+EXTRAS    := test,fast,dask,stonesoup,labelled
 VENV      := .venv
 PY        := $(VENV)/bin/python
 STAMP     := $(VENV)/.installed-stamp

@@ -13,7 +13,8 @@ Every stage class (one per chain ``type``: ``CBF``, ``DFTFilter``, ``ETAM``, ``C
 every motion and measurement model (``ConstantVelocity``, ``Bearing``, ``TDOA``, ...), every
 filter (``EKF``, ``UKF``, ``RPF``, ... and ``make_filter``), every batch TMA method
 (``solve_bearings``, ``solve_delays``, ``solve_compact``, ...), the products reader
-(``read_products`` -> ``ProductsFile`` with ``.groups(kind)``), the plots (``plot_file`` and
+(``read_products`` -> ``ProductsFile`` with ``.groups(kind)``; ``open_products`` and
+``open_recording`` -> xarray datasets and pandas tables), the plots (``plot_file`` and
 the ``draw_*`` functions that draw on a matplotlib ``Axes``) and the simulator
 (``simulate_file``) are reachable the same way; the full list is ``arrayproc.__all__``. Each
 name is defined once: each ``arrayproc`` attribute is the object of the module listed in ``_API``.
@@ -42,6 +43,8 @@ _API = {
     "ProductsFile": "arrayproc.io.products",
     "ProductGroup": "arrayproc.io.products",
     "read_products": "arrayproc.io.products",
+    "open_products": "arrayproc.io.labelled",
+    "open_recording": "arrayproc.io.labelled",
     # stages: one class per chain type (arrayproc.stages.TYPES; a test keeps them equal)
     "DFTFilter": "arrayproc.stages.condition.dft_filter",
     "CBF": "arrayproc.stages.beamform.cbf",
@@ -66,6 +69,7 @@ _API = {
     "LRCBF": "arrayproc.stages.beamform.lr_cbf",
     "MVDR": "arrayproc.stages.beamform.mvdr",
     "MUSIC": "arrayproc.stages.beamform.music",
+    "BeamAudio": "arrayproc.stages.beamform.beam_audio",
     # simulation
     "simulate_file": "arrayproc.sim.run",
     # tracking: runners, models, filters

@@ -7,7 +7,9 @@ chosen one and turns what can go wrong into one line on stderr:
 
 * a user error (:class:`~arrayproc.errors.ArrayprocError`): ``arrayproc: error: …``, status 2;
 * SIGINT, SIGTERM, SIGHUP: the run stops, temporary files are removed, status 130, 143, 129;
-* Python warnings (e.g. a diverging track): ``arrayproc: warning: …``;
+* Python warnings (e.g. a diverging track): ``arrayproc: warning: …``; the package's log
+  records (Python logging) one per line on stderr at the level ``-q`` / ``-v`` set
+  (:mod:`arrayproc.app.logs`);
 * a long command's end: ``arrayproc: wrote OUT (…) in T s, Nx real time, peak M MB`` on
   stdout, unless ``-q`` (:mod:`arrayproc.app.progress`);
 * anything else is a bug: ``arrayproc: internal error: …``, status 70, with the traceback
@@ -33,7 +35,8 @@ from arrayproc.errors import ArrayprocError, Interrupted
 #: Modules that add sub-commands: each defines ``add_parser(sub)``. A new command module
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
 COMMAND_MODULES: tuple[str, ...] = ("arrayproc.app.commands", "arrayproc.app.batch",
-                                     "arrayproc.app.demo", "arrayproc.app.catalogue")
+                                     "arrayproc.app.demo", "arrayproc.app.catalogue",
+                                     "arrayproc.app.listen")
 
 #: Signals that stop a run: exit status 128 + signal number.
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
@@ -255,8 +258,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             args = build_parser().parse_args(argv)
             args.started = started
-            ensure_numba_cache()
-            return _run(args)
+            from arrayproc.app import logs
+            restore_logs = logs.configure(logs.level_of(getattr(args, "quiet", False),
+                                                        getattr(args, "verbose", 0)))
+            try:
+                ensure_numba_cache()
+                return _run(args)
+            finally:
+                restore_logs()
         except Interrupted as e:  # a signal while parsing or reporting
             print(f"arrayproc: error: {e}; no output written", file=sys.stderr)
             return 128 + e.signum

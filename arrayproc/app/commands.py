@@ -23,6 +23,7 @@ import importlib
 from typing import Any
 
 from arrayproc.app.options import (
+    add_calibration_options,
     add_config,
     add_geometry_options,
     add_no_progress,
@@ -113,7 +114,9 @@ def _run_import(args: argparse.Namespace) -> int:
     check_output(args.output, [*args.wav, *geometry_inputs(args)])
     r = import_wavs(args.wav, args.output, positions=geometry_of(args), scale=args.scale,
                     sound_speed=args.sound_speed, start_time=args.start_time,
-                    inputs=geometry_inputs(args))
+                    inputs=geometry_inputs(args), sensitivity_db=args.sensitivity,
+                    gain_db=args.gain, full_scale_volts=args.full_scale_volts,
+                    response=args.response)
     done(args.output, f"{recording_what(args.output)}, {r['format']}",
          audio_seconds(args.output))
     return 0
@@ -158,7 +161,8 @@ def _run_export(args: argparse.Namespace) -> int:
     done = Summary.of(args)
     n = export(args.files, args.to, args.output, origin=tuple(args.origin))
     audio = [audio_seconds(f) for f in args.files]
-    done(args.output, f"{n} {'selections' if args.to == 'raven' else 'lines'}",
+    unit = {"raven": "selections", "rep": "lines"}.get(args.to, "groups")
+    done(args.output, f"{n} {unit}",
          sum(audio) if all(a is not None for a in audio) else None)
     return 0
 
@@ -205,12 +209,15 @@ def _add_process(sub: Any) -> None:
 
 
 def _add_import(sub: Any) -> None:
-    s = sub.add_parser("import", help="turn WAV field recordings into a recording file")
-    s.add_argument("wav", nargs="+", help="one multichannel WAV or one mono WAV per hydrophone "
-                   "(channels in the natural order of the names: hyd2 before hyd10)")
+    s = sub.add_parser("import", help="turn WAV, FLAC or AIFF field recordings into a "
+                       "recording file")
+    s.add_argument("wav", nargs="+", help="one multichannel audio file (WAV, FLAC, AIFF, …) or "
+                   "one mono file per hydrophone (channels in the natural order of the names: "
+                   "hyd2 before hyd10)")
     add_output(s, "recording HDF5 file to write")
     s.add_argument("--scale", type=float, default=None,
                    help="pascals per full scale (default: store full-scale units)")
+    add_calibration_options(s)
     s.add_argument("--sound-speed", type=float, default=1500.0, help="m/s (default 1500)")
     s.add_argument("--start-time", default=None, help="ISO-8601 UTC start (default: from the "
                    "file name when it holds one, e.g. 20190920T163858Z)")
@@ -264,12 +271,14 @@ def _add_tma(sub: Any) -> None:
 
 
 def _add_export(sub: Any) -> None:
-    s = sub.add_parser("export", help="write Raven selection tables or Debrief REP files")
+    s = sub.add_parser("export", help="write Raven selection tables, Debrief REP files, or "
+                       "NetCDF4/Zarr labelled arrays")
     s.add_argument("files", nargs="+", help="products files (raven: in time order) or one "
-                   "tracks file (rep)")
-    s.add_argument("--to", required=True, choices=("raven", "rep"),
-                   help="raven: selection table; rep: Debrief replay file")
-    add_output(s, "text file to write")
+                   "tracks file (rep), one products or tracks file (netcdf, zarr)")
+    s.add_argument("--to", required=True, choices=("raven", "rep", "netcdf", "zarr"),
+                   help="raven: selection table; rep: Debrief replay file; netcdf: NetCDF4 "
+                        "file, zarr: Zarr store, one group per products group")
+    add_output(s, "file to write (a directory for zarr)")
     s.add_argument("--origin", type=float, nargs=2, default=(0.0, 0.0),
                    metavar=("LAT", "LON"), help="rep: latitude/longitude of x = y = 0 (deg)")
     add_quiet(s)

@@ -2,7 +2,8 @@
 every command (a test walks the parser: tests/app/test_cli_flags.py):
 
 * ``-q, --quiet``: print nothing on stdout; errors and warnings still go to stderr and the exit
-  status tells the outcome (every command has it);
+  status tells the outcome (every command has it); ``-v, --verbose``: the package's debug
+  log records on stderr too (:mod:`arrayproc.app.logs`);
 * ``-c, --config``: the configuration file the command runs (a chain, a tracker, a TMA
   configuration; ``--chain`` is an alias where a chain is meant);
 * ``-o, --output``: the file or folder to write;
@@ -21,6 +22,7 @@ if TYPE_CHECKING:
     import numpy as np
 
 QUIET_HELP = "print nothing on stdout (errors and warnings still go to stderr)"
+VERBOSE_HELP = "log more on stderr: debug detail as well as information (logging)"
 
 
 def finite(v: float) -> bool:
@@ -29,8 +31,11 @@ def finite(v: float) -> bool:
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:
-    """``-q, --quiet`` with its one meaning (:data:`QUIET_HELP`)."""
+    """``-q, --quiet`` with its one meaning (:data:`QUIET_HELP`), and ``-v, --verbose``
+    (:data:`VERBOSE_HELP`): the levels of the package's logging (:mod:`arrayproc.app.logs`;
+    ``-q`` also keeps information off stderr)."""
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
+    p.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
 
 
 def add_no_progress(p: argparse.ArgumentParser) -> None:
@@ -87,6 +92,21 @@ def geometry(line: Sequence[float] | None = None, geometry_file: str | None = No
             pos[:, 2] = -pos[:, 2]
         return pos
     return None
+
+
+def add_calibration_options(p: argparse.ArgumentParser) -> None:
+    """``--sensitivity DB`` / ``--response CSV``, ``--gain DB``, ``--full-scale-volts V``: the
+    samples of an import in pascals (:mod:`arrayproc.io.calibration`)."""
+    p.add_argument("--sensitivity", type=float, default=None, metavar="DB",
+                   help="hydrophone sensitivity, dB re 1 V/µPa (e.g. -170): samples stored in "
+                        "Pa, levels in dB re 1 µPa; needs --full-scale-volts")
+    p.add_argument("--gain", type=float, default=None, metavar="DB",
+                   help="gain between hydrophone and recorder, dB (default 0)")
+    p.add_argument("--full-scale-volts", type=float, default=None, metavar="V",
+                   help="voltage of the recorder's full scale (sample value 1), V")
+    p.add_argument("--response", default=None, metavar="CSV",
+                   help="frequency response instead of --sensitivity: CSV rows of freq_hz, "
+                        "sensitivity_db (re 1 V/µPa), corrected as a filter")
 
 
 def add_geometry_options(p: argparse.ArgumentParser) -> None:

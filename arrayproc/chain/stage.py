@@ -8,8 +8,8 @@ when imported, and the application layer imports them (:func:`arrayproc.stages.l
 from __future__ import annotations
 
 import inspect
+import logging
 import re
-import sys
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -28,7 +28,7 @@ class RunContext:
     products: Any = None  # ProductsWriter or None
     sound_speed: float = 1500.0
     recording: Any = None  # the Recording (metadata and truth), or None
-    log: Callable[[str], None] = field(default=lambda msg: print(msg, file=sys.stderr))
+    log: Callable[[str], None] = field(default=logging.getLogger("arrayproc.chain").warning)
 
 
 class Stage(ABC):

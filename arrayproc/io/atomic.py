@@ -159,9 +159,14 @@ def commit(tmp: Path, target: str | os.PathLike) -> None:
 
 
 def discard(tmp: Path) -> None:
-    """Remove a temporary file left by a failed write (no error if it is absent)."""
+    """Remove a temporary file (or directory: a Zarr store) left by a failed write (no error
+    if it is absent)."""
     try:
-        os.unlink(tmp)
+        if os.path.isdir(tmp) and not os.path.islink(tmp):
+            import shutil
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            os.unlink(tmp)
     except FileNotFoundError:
         pass
     with _LOCK:

@@ -74,6 +74,11 @@ class RecordingWriter(AtomicH5Writer):
         self._td[self.n_samples:self.n_samples + n] = data
         self.n_samples += n
 
+    def set_calibration(self, text: str) -> None:
+        """The ``/time_data`` attribute ``calibration``: how the samples were turned into
+        their unit (e.g. ``sensitivity -170 dB re 1 V/µPa, gain 20 dB, full scale 1 V``)."""
+        self._td.attrs["calibration"] = str(text)
+
     def set_nav(self, time: np.ndarray, position: np.ndarray, heading: np.ndarray,
                 depth: np.ndarray | None = None) -> None:
         """Write ``/nav`` (time s, position (n,2) m, heading deg true, optional depth m)."""

@@ -10,6 +10,7 @@ this module.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -42,6 +43,9 @@ class Column:
         For each trailing dimension, the axes (static datasets of the kind) that may label
         it, the first present one used (``(("cone_deg", "bearing_deg"), ("freq",))`` for a
         LOFAR-gram); empty when no axis labels it.
+    dims : tuple
+        Names of the trailing dimensions in labelled arrays (:mod:`arrayproc.io.labelled`)
+        where no axis labels them (``("channel",)``, ``("state_i", "state_j")``).
     """
 
     unit: str
@@ -50,6 +54,13 @@ class Column:
     dtype: str = "f8"
     trailing: tuple = ()
     labels: tuple = ()
+    dims: tuple = ()
+
+    @property
+    def long_name(self) -> str:
+        """The doc without its shape note (``"band power per channel"``): the ``long_name``
+        of labelled arrays and NetCDF/Zarr exports."""
+        return re.sub(r",\s*\([^()]*\)$", "", self.doc).strip()
 
 
 @dataclass(frozen=True)
@@ -71,11 +82,13 @@ class Kind:
 
 
 def _c(unit: str, doc: str, required: bool = True, dtype: str = "f8",
-       trailing: tuple = (), labels: tuple = ()) -> Column:
-    return Column(unit, doc, required, dtype, trailing, labels)
+       trailing: tuple = (), labels: tuple = (), dims: tuple = ()) -> Column:
+    return Column(unit, doc, required, dtype, trailing, labels, dims)
 
 
 _ANY, _ANY2 = (None,), (None, None)  # trailing sizes set by the data (channels, beams, bins)
+_CH, _XYZ, _STATE = ("channel",), ("axis_i", "axis_j"), ("state_i", "state_j")  # dim names
+_PK = ("pair", "peak")
 _BEAMS = ("cone_deg", "bearing_deg")  # the axes that label a beam dimension
 
 _BEAM_AXES = {
@@ -87,17 +100,18 @@ _BEAM_AXES = {
 _KINDS = [
     Kind("power", "time block", {
         "time": _c("s", "centre time of the block"),
-        "power_db": _c("dB re 1 µPa", "band power per channel, (n, n_ch)", trailing=_ANY),
+        "power_db": _c("dB re 1 µPa", "band power per channel, (n, n_ch)", trailing=_ANY,
+                       dims=_CH),
     }),
     Kind("btr", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
         "power_db": _c("dB", "broadband beam power over the band, (n, n_beams)", trailing=_ANY,
-                       labels=(_BEAMS,)),
+                       labels=(_BEAMS,), dims=("beam",)),
     }, _BEAM_AXES),
     Kind("lofar", "integrated snapshot", {
         "time": _c("s", "centre time of the integrated snapshots"),
         "power_db": _c("dB", "TPSW-normalised spectrum per beam, (n, n_beams, n_freq)",
-                        trailing=_ANY2, labels=(_BEAMS, ("freq",))),
+                        trailing=_ANY2, labels=(_BEAMS, ("freq",)), dims=("beam", "freq")),
     }, {**_BEAM_AXES, "freq": _c("Hz", "frequency of each bin")}),
     Kind("bearings", "peak on a BTR row or a LOFAR line, or a 2-D peak of azimuth × "
          "elevation beams", {
@@ -162,9 +176,9 @@ _KINDS = [
     Kind("delays", "snapshot or event", {
         "time": _c("s", "centre time"),
         "tau": _c("s", "delay of every channel relative to the reference, (n, n_ch)",
-                  trailing=_ANY),
-        "sigma": _c("s", "1-sigma of each delay, (n, n_ch)", trailing=_ANY),
-        "corr": _c("", "peak normalised correlation, (n, n_ch)", trailing=_ANY),
+                  trailing=_ANY, dims=_CH),
+        "sigma": _c("s", "1-sigma of each delay, (n, n_ch)", trailing=_ANY, dims=_CH),
+        "corr": _c("", "peak normalised correlation, (n, n_ch)", trailing=_ANY, dims=_CH),
         "source": _c("", "source hypothesis of the row within its snapshot, strongest first "
                      "(tde peaks > 1: one row per source)", False, dtype="i8"),
         "closure": _c("", "fraction of the channel triplets through the reference whose "
@@ -174,17 +188,17 @@ _KINDS = [
          "peaks > 1)", {
         "time": _c("s", "centre time"),
         "tau": _c("s", "lag of b after a per pair (a, b) and peak, (n, n_pairs, K); NaN "
-                  "where absent", trailing=_ANY2),
-        "sigma": _c("s", "1-sigma of each lag, (n, n_pairs, K)", trailing=_ANY2),
-        "corr": _c("", "normalised peak correlation, (n, n_pairs, K)", trailing=_ANY2),
+                  "where absent", trailing=_ANY2, dims=_PK),
+        "sigma": _c("s", "1-sigma of each lag, (n, n_pairs, K)", trailing=_ANY2, dims=_PK),
+        "corr": _c("", "normalised peak correlation, (n, n_pairs, K)", trailing=_ANY2, dims=_PK),
         "snr_db": _c("dB", "SNR read from the correlation as a coherence, (n, n_pairs, K)",
-                     trailing=_ANY2),
+                     trailing=_ANY2, dims=_PK),
     }, {"pairs": _c("", "channel pairs (a, b) of the pair axis, (n_pairs, 2)", dtype="i8",
-                    trailing=(2,))}),
+                    trailing=(2,), dims=("pair_end",))}),
     Kind("positions", "localised event", {
         "time": _c("s", "event time"),
         "x": _c("m", "east"), "y": _c("m", "north"), "z": _c("m", "down"),
-        "cov": _c("m²", "position covariance, (n, 3, 3)", trailing=(3, 3)),
+        "cov": _c("m²", "position covariance, (n, 3, 3)", trailing=(3, 3), dims=_XYZ),
         "tdoa_rms_s": _c("s", "RMS of the TDOA residuals"),
         "n_used": _c("", "channel pairs used", dtype="i8"),
         "source": _c("", "source hypothesis of the event's delays row (tde peaks > 1)",
@@ -202,7 +216,8 @@ _KINDS = [
         "time": _c("s", "ping time", False),
         "ping": _c("", "ping index", dtype="i8"),
         "cone_deg": _c("deg", "beam cone angle"),
-        "level_db": _c("dB", "matched-filter output, (n, n_range_rate, n_range)", trailing=_ANY2),
+        "level_db": _c("dB", "matched-filter output, (n, n_range_rate, n_range)", trailing=_ANY2,
+                       labels=(("range_rate_mps",), ("range_m",))),
     }, {"range_m": _c("m", "range axis"), "range_rate_mps": _c("m/s", "range-rate axis")}),
     Kind("contacts", "CFAR contact of one ping", {
         "time": _c("s", "echo time"),
@@ -235,7 +250,7 @@ _KINDS = [
         "track_id": _c("", "track number", dtype="i8"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
-        "cov": _c("m², m²/s²", "state covariance, (n, 4, 4)", trailing=(4, 4)),
+        "cov": _c("m², m²/s²", "state covariance, (n, 4, 4)", trailing=(4, 4), dims=_STATE),
         "status": _c("", "0 tentative, 1 confirmed, 2 deleted", False),
         "side_weight": _c("", "weight of the starboard hypothesis (L-R)", False),
         "own_x": _c("m", "ownship east"), "own_y": _c("m", "ownship north"),
@@ -263,8 +278,9 @@ _KINDS = [
         "method": _c("", "bearings, bearings_frequency, delays or compact", dtype="S20"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
-        "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)", trailing=(4, 4)),
-        "crlb": _c("m², m²/s²", "Cramér-Rao bound, (n, 4, 4)", trailing=(4, 4)),
+        "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)", trailing=(4, 4),
+                  dims=_STATE),
+        "crlb": _c("m², m²/s²", "Cramér-Rao bound, (n, 4, 4)", trailing=(4, 4), dims=_STATE),
         "cost": _c("", "negative log-likelihood at the solution"),
         "fim_cond": _c("", "condition number of the Fisher information (eq. 3.54)"),
         "heading_deg": _c("deg", "target course"),

@@ -15,10 +15,12 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from arrayproc.errors import FormatError
+from arrayproc.io.calibration import Calibration
 from arrayproc.io.recording import RecordingWriter
 
 _PCM, _FLOAT, _EXTENSIBLE = 1, 3, 0xFFFE
@@ -128,6 +130,27 @@ def read_wav_frames(info: WavInfo, start: int, count: int) -> np.ndarray:
     return x.reshape(count, info.n_channels)
 
 
+#: File name endings read by this module's WAV reader; the rest go to libsndfile.
+WAV_SUFFIXES = (".wav", ".wave")
+
+
+def audio_info(path: str | os.PathLike) -> Any:
+    """The header of any audio file: WAV by :func:`read_wav_info`, every other format by
+    libsndfile (:func:`arrayproc.io.audio.soundfile_info`)."""
+    if Path(path).suffix.lower() in WAV_SUFFIXES:
+        return read_wav_info(path)
+    from arrayproc.io.audio import soundfile_info
+    return soundfile_info(path)
+
+
+def read_frames(info: Any, start: int, count: int) -> np.ndarray:
+    """Frames [start, start + count) of any audio file as float64 fractions of full scale."""
+    if isinstance(info, WavInfo):
+        return read_wav_frames(info, start, count)
+    from arrayproc.io.audio import soundfile_frames
+    return soundfile_frames(info, start, count)
+
+
 def _name_key(name: str) -> list[tuple[int, int, str]]:
     """Natural sort key of a file name: text runs compared as text, digit runs as numbers."""
     return [(1, int(t), t) if t.isdigit() else (0, 0, t) for t in re.split(r"(\d+)", name)]
@@ -186,21 +209,26 @@ def channel_order(paths: Sequence[str | os.PathLike]) -> tuple[list, str | None]
 def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                 positions: np.ndarray | None = None, scale: float | None = None,
                 sound_speed: float = 1500.0, start_time: str | None = None,
-                chunk: int = 1 << 16, warn: Callable[[str], None] | None = None) -> dict:
-    """Write WAV recordings as one recording file; returns a summary dict.
+                chunk: int = 1 << 16, warn: Callable[[str], None] | None = None,
+                calibration: Calibration | None = None) -> dict:
+    """Write audio recordings (WAV; FLAC, AIFF and the rest through :func:`audio_info`) as
+    one recording file; returns a summary dict.
 
     Several files are taken as one mono (or multichannel) stream each, concatenated along
     channels in the natural order of their names (:func:`channel_order`, with a notice when
     that is not the order given); they must share sample rate and sample format. Files of
     unequal length are cut to the shortest, with a warning naming the longer ones. ``scale``
-    converts full scale to Pa.
+    converts full scale to Pa; so does ``calibration``
+    (:class:`arrayproc.io.calibration.Calibration`: a sensitivity, gain and full-scale voltage,
+    or a frequency-response sheet), which is also written as the ``/time_data`` attribute
+    ``calibration``.
     """
     if not paths:
-        raise FormatError("import: no WAV files given")
+        raise FormatError("import: no audio files given")
     paths, notice = channel_order(paths)
     if notice is not None:
         (warn or warnings.warn)(notice)
-    infos = [read_wav_info(p) for p in paths]
+    infos = [audio_info(p) for p in paths]
     ref = infos[0]
     for i in infos[1:]:
         if i.fs != ref.fs:
@@ -221,15 +249,25 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
     if positions is not None and len(positions) != n_ch:
         raise FormatError(f"geometry has {len(positions)} positions but the WAV files hold "
                           f"{n_ch} channels")
+    fir = None
+    if calibration is not None:
+        scale, fir = calibration.scale(), calibration.response_filter(ref.fs)
     with RecordingWriter(out, ref.fs, n_ch, positions=positions, sound_speed=sound_speed,
-                         start_time=start_time, units="Pa" if scale else "FS",
+                         start_time=start_time, units="Pa" if scale or fir else "FS",
                          attrs={"imported_from": ", ".join(str(i.path.name) for i in infos)}
                          ) as w:
+        if calibration is not None:
+            w.set_calibration(calibration.describe())
         for s in range(0, n, chunk):
             c = min(chunk, n - s)
-            block = np.concatenate([read_wav_frames(i, s, c) for i in infos], axis=1)
+            block = np.concatenate([read_frames(i, s, c) for i in infos], axis=1)
             if scale:
                 block *= scale
+            if fir is not None:
+                block = fir.process(block)
             w.append(block.astype(np.float32))
+        tail = fir.flush() if fir is not None else None
+        if tail is not None and tail.shape[0]:
+            w.append(tail.astype(np.float32))
     return {"fs": ref.fs, "n_channels": n_ch, "n_samples": n, "format": ref.kind,
             "cut": longer}

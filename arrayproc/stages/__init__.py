@@ -46,6 +46,7 @@ TYPES: dict[str, str] = {
     "lr_cbf": "arrayproc.stages.beamform.lr_cbf",
     "mvdr": "arrayproc.stages.beamform.mvdr",
     "music": "arrayproc.stages.beamform.music",
+    "beam_audio": "arrayproc.stages.beamform.beam_audio",
 }
 
 

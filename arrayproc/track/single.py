@@ -46,9 +46,9 @@ filter (:func:`arrayproc.track.filters.make_filter`) and the L-R resolver
 
 from __future__ import annotations
 
+import logging
 import math
 import os
-import sys
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -72,6 +72,8 @@ from arrayproc.track.models.level_bearing import LevelBearing
 from arrayproc.track.models.motion import Q1_PAPER, Q2_PAPER, make_model
 from arrayproc.track.state import Context
 from arrayproc.track.types import legacy_table
+
+_log = logging.getLogger(__name__)
 
 _PRIOR_KEYS = ("range_m", "sigma_range_m", "speed_mps", "sigma_speed_mps", "sigma_course_deg",
                "sigma_turn_deg_s")
@@ -414,8 +416,8 @@ def run_single(products_path: str, config_path: str, out_path: str,
         zs = (port if cfg["side"] == "port" else stbd)[:, None]
     zs = wrap_pi(zs)
     if progress:
-        print(f"tracking {t.size} bearings with {cfg['filter'].upper()}"
-              f"{' + L-R resolution' if cfg['lr'] else ''}", file=sys.stderr)
+        _log.info(f"tracking {t.size} bearings with {cfg['filter'].upper()}"
+                  f"{' + L-R resolution' if cfg['lr'] else ''}")
     xs, Ps, ws, status = track_bearings(t, zs, own, cfg,
                                         b[cfg["level"]] if "level" in cfg else None, hd)
     n_ok = t.size

@@ -79,9 +79,9 @@ stored in the group attribute ``delay_correlation`` (one value per window).
 
 from __future__ import annotations
 
+import logging
 import math
 import os
-import sys
 import warnings
 from collections.abc import Mapping
 from typing import Any
@@ -101,6 +101,8 @@ from .compact import solve_compact
 from .motion import axial_speed, nav_velocity, static_cone
 from .result import TmaSolution
 from .td_tma import solve_delays
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements", "solve_window"]
 
@@ -483,10 +485,10 @@ def run_tma(products_path: str, config_path: str, output_path: str,
             sols.append(sol)
             warn_if_far(sol, rec, cfg, f"{products_path}: window [{w0:g}, {w1:g}] s")
             if progress:
-                print(f"tma {cfg['method']} [{w0:8.1f}, {w1:8.1f}] s: x {sol.state[0]:9.1f} "
-                      f"y {sol.state[1]:9.1f} m, course {sol.heading_deg:5.1f} deg, speed "
-                      f"{sol.speed_mps:5.2f} m/s, range σ {sol.range_sigma:8.1f} m",
-                      file=sys.stderr)
+                _log.info(f"tma {cfg['method']} [{w0:8.1f}, {w1:8.1f}] s: x "
+                          f"{sol.state[0]:9.1f} y {sol.state[1]:9.1f} m, course "
+                          f"{sol.heading_deg:5.1f} deg, speed {sol.speed_mps:5.2f} m/s, range σ "
+                          f"{sol.range_sigma:8.1f} m")
     if not sols:
         raise FormatError(f"{products_path}: no window with 5 or more measurements")
     sols = with_unresolved_mirrors(sols, cfg["mirror_chi2"], products_path)

@@ -7,8 +7,8 @@ with its id and status); one row per time, by the one-source
 
 from __future__ import annotations
 
+import logging
 import os
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +21,8 @@ from arrayproc.io.text import as_text
 from arrayproc.track.delays.config import load_delays_config
 from arrayproc.track.delays.sources import track_delay_sources
 from arrayproc.track.delays.tracker import track_delays
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["read_delays", "run_delays"]
 
@@ -125,8 +127,8 @@ def run_delays(products_path: str, config_path: str, out_path: str,
               corr=meas["corr"], array_velocity=vel)
     if progress:
         r = float(np.hypot(*res["rel"][-1]))
-        print(f"delays tracker ({cfg['filter']}, {d['motion']}): {res['time'].size} rows, "
-              f"{int(res['updated'].sum())} updates, final range {r:.1f} m", file=sys.stderr)
+        _log.info(f"delays tracker ({cfg['filter']}, {d['motion']}): {res['time'].size} rows, "
+                  f"{int(res['updated'].sum())} updates, final range {r:.1f} m")
     n = res["time"].size
     cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
     with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,

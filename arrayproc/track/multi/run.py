@@ -5,7 +5,7 @@ one ``tracks`` group."""
 
 from __future__ import annotations
 
-import sys
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,8 @@ from arrayproc.track.multi.contacts import contact_scans, contacts_manager, drop
 from arrayproc.track.multi.positions import positions_manager
 from arrayproc.track.multi.tma import tma_track
 from arrayproc.track.state import Context
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["multi_target", "run_multi", "confirmed_status"]
 
@@ -294,7 +296,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     tracks, rows = multi_target(products_path, cfg, tma_cfg, nav)
     if progress:
         n_conf = sum(tr.confirmed_at is not None for tr in tracks)
-        print(f"{len(tracks)} tracks, {n_conf} confirmed", file=sys.stderr)
+        _log.info(f"{len(tracks)} tracks, {n_conf} confirmed")
     cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
     with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,
                         attrs={"recording": str(rec)}) as w:
