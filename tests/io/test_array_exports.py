@@ -39,9 +39,13 @@ def _every_kind(path, rng, units="Pa"):
             g = w.group(f"g_{k.name}", k.name, beam_mode="cone")
             sizes = {"cone_deg": SIZES[0], "bearing_deg": SIZES[0], "elevation_deg": SIZES[0],
                      "freq": SIZES[1], "range_rate_mps": SIZES[0], "range_m": SIZES[1]}
-            for a in k.axes:
-                if a != "bearing_deg":  # one beam axis: cone angles
+            for a, col in k.axes.items():
+                if a == "bearing_deg":  # one beam axis: cone angles
+                    continue
+                if a in sizes:
                     g.set(a, np.sort(rng.random(sizes[a])) * 100)
+                else:  # a table axis (delay_peaks' channel pairs)
+                    g.set(a, _values(rng, col, SIZES[0], SIZES))
             g.append(**{c: _values(rng, col, N_ROWS, SIZES) for c, col in k.columns.items()})
         w.group("empty_bearings", "bearings")  # a stage that found nothing
     return path
