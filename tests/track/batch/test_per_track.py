@@ -159,3 +159,14 @@ def test_cli_errors(scene, tmp_path, capsys):
                  "no confirmed track", out)
     dl = _cfg(tmp_path, 'method = "delays"\n', "dl.toml")
     _check_error(["tma", scene["tracks"], "-c", dl, "-o", out], capsys, "delays group", out)
+
+
+def test_plot_per_track(scene, tmp_path):
+    """`plot TMA.h5` of a per-track group: the plan view with each track's solution and its
+    CRLB ellipses, and the measured against fitted cone angles."""
+    cfg = _cfg(tmp_path, 'method = "auto"\n' + QUICK)
+    out = tmp_path / "tma.h5"
+    run_tracks_tma(str(scene["tracks"]), cfg, str(out))
+    png = tmp_path / "tma.png"
+    assert main(["plot", str(out), "-o", str(png), "-q"]) == 0
+    assert png.stat().st_size > 20_000
