@@ -9,8 +9,9 @@ Scenario: :func:`arrayproc.track.batch.scenarios.endfire_turn_track` (ownship 5 
 :data:`arrayproc.track.batch.scenarios.ENDFIRE_SOURCE` (3.6 km on bearing 025, 3 m/s on course
 300, tonal 300 Hz), one row every 5 s (126), σ 0.5° and 0.05 Hz, written as a recording and a
 products file by :func:`arrayproc.track.batch.synthetic.write_line_array_scenario` (bearings
-and lines groups); the tracks by the shipped ``multi_target`` tracker, the line frequency of
-each row the track used added as the tracks' ``freq_hz``; both paths with the shipped
+and lines groups); the tracks by the shipped ``multi_target`` tracker on the bearings, and the
+same tracks holding each point's measurement and line frequency as the lines+bearings tracker
+writes them (:func:`arrayproc.track.batch.synthetic.with_measurements`); both paths with the shipped
 ``tracks`` TMA file (the products path with ``method = "bearings_frequency"`` for the lines).
 """
 
@@ -30,7 +31,7 @@ from arrayproc.app.cli import main as cli
 from arrayproc.data import data_path
 from arrayproc.io.products import read_products
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.synthetic import Source, write_line_array_scenario
+from arrayproc.track.batch.synthetic import Source, with_measurements, write_line_array_scenario
 
 TRUTH = np.append(S.ENDFIRE_SOURCE, 300.0)
 
@@ -61,24 +62,15 @@ def trial(seed: int, folder: Path) -> dict:
         0.5, 0.05, seed=seed, lines=True)
     tracks = folder / "tracks.h5"
     _run(["track", prod, "-c", "multi_target", "-o", tracks])
-    with h5py.File(tracks, "a") as f:
-        r = f["tracks/row"][()]
-        f["tracks"].create_dataset("freq_hz", data=np.where(
-            r >= 0, rows["freq_hz"][np.maximum(r, 0)], np.nan))
+    tracks_f = folder / "tracks_f.h5"
+    with_measurements(tracks, tracks_f, prod, rows["freq_hz"])
     cfg = Path(data_path("tma")) / "tracks.toml"
     bf_cfg = folder / "bf.toml"
     bf_cfg.write_text(cfg.read_text().replace('method = "auto"',
                                               'method = "bearings_frequency"'))
     out = {}
-    for name, src, c in (("products_bearings", prod, cfg), ("track_bearings_only", None, cfg),
-                         ("products_bf", prod, bf_cfg), ("track_bf", tracks, cfg)):
-        if src is None:  # the same tracks without their frequencies: bearings
-            src = folder / "tracks_nof.h5"
-            with h5py.File(tracks) as f, h5py.File(src, "w") as g:
-                for k, v in f.attrs.items():
-                    g.attrs[k] = v
-                f.copy("tracks", g)
-                del g["tracks/freq_hz"]
+    for name, src, c in (("products_bearings", prod, cfg), ("track_bearings", tracks, cfg),
+                         ("products_bf", prod, bf_cfg), ("track_bf", tracks_f, cfg)):
         _run(["tma", src, "-c", c, "-o", folder / f"{name}.h5"])
         out[name] = _preferred(folder / f"{name}.h5")
     with h5py.File(tracks) as f:
@@ -100,7 +92,7 @@ def main() -> None:
     diff = {k: float(max(np.max(np.abs(np.subtract(r[f"products_{k}"]["state"],
                                                    r[f"track_{kk}"]["state"])))
                          for r in res))
-            for k, kk in (("bearings", "bearings_only"), ("bf", "bf"))}
+            for k, kk in (("bearings", "bearings"), ("bf", "bf"))}
     s = {"seeds": a.seeds, "max_abs_state_difference_products_vs_track": diff,
          "track_rows": [r["track_rows"] for r in res],
          "mean_nees4": {k: float(np.mean([r[k]["nees4"] for r in res])) for k in res[0]
