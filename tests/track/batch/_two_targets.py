@@ -25,9 +25,9 @@ SIG_DEG, SIG_HZ = 0.5, 0.05
 
 
 def build(folder: Path, seed: int) -> dict[str, Path | dict]:
-    """Recording, products and tracks (``tracks.h5``: bearings alone; ``tracks_f.h5``: the
-    same tracks holding each point's measurement with its line frequency, as the
-    lines+bearings tracker writes them: :func:`with_measurements`)."""
+    """Recording, products and tracks in ``folder``: ``tracks``, the bearings tracks;
+    ``tracks_f``, the same tracks holding each point's measurement with its line frequency, as
+    the lines+bearings tracker writes them (:func:`with_measurements`)."""
     folder.mkdir(parents=True, exist_ok=True)
     nav, _ = S.endfire_turn_track(n=626, dt=1.0)
     rec, prod, rows = write_line_array_scenario(str(folder), nav, SOURCES,
