@@ -145,6 +145,9 @@ def read_track_rows(tracks_path: str, cfg: dict[str, Any]) -> TrackRows:
         out = {int(tid): _own_measurements(g, ids == tid, cfg) for tid in confirmed}
         return TrackRows(out, products, rec, as_text(g["attrs"].get("measurements", "")),
                          None)
+    if as_text(g["attrs"].get("measurements", "bearings")) != "bearings":
+        raise FormatError(f"{tracks_path}: lines tracks without their per-point measurements "
+                          "(meas_cone_deg …): their rows index two products groups")
     prod = read_products(products)
     name = cfg["group"] or as_text(g["attrs"].get("group", ""))
     if name:
