@@ -260,9 +260,10 @@ def _add_track(sub: Any) -> None:
 
 
 def _add_tma(sub: Any) -> None:
-    s = sub.add_parser("tma", help="batch ML target motion analysis (bearings, delays or "
-                       "compact) with Cramér-Rao bounds")
-    s.add_argument("products", help="products HDF5 file with bearings or delays")
+    s = sub.add_parser("tma", help="batch ML target motion analysis (bearings, bearings + "
+                       "frequency, delays or compact) with Cramér-Rao bounds")
+    s.add_argument("products", help="products HDF5 file with bearings, lines or delays, or a "
+                   "multi-target tracks file (one solution per confirmed track)")
     add_config(s, "TMA TOML file")
     add_output(s, "products HDF5 file to write")
     add_no_progress(s)

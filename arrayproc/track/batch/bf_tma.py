@@ -138,7 +138,8 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     angle_rad : (B,) array_like
         Bearings (rad clockwise from north), or cone angles when ``heading_rad`` is given.
     freq_hz : (B,) array_like
-        Received frequency of the source's tonal (Hz).
+        Received frequency of the source's tonal (Hz); NaN for a row with an angle only
+        (a broadband bearing), which then has no frequency term.
     observer_xy, observer_vel : (B, 2) array_like
         Array phase-centre positions (m) and velocities (m/s).
     sigma_rad, sigma_hz : float or None
@@ -191,16 +192,24 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     obs = np.asarray(observer_xy, float).reshape(t.size, 2)
     ov = np.asarray(observer_vel, float).reshape(t.size, 2)
     hd = None if heading_rad is None else np.asarray(heading_rad, float).reshape(-1)
-    ok = np.isfinite(ang) & np.isfinite(f) & np.isfinite(t)
+    ok = np.isfinite(ang) & np.isfinite(t)
     n_in = int(ok.sum())
     if outliers and n_in > poly_degree + 2:
-        ok[ok] = (reject_outliers(t[ok], np.cos(ang[ok]) if hd is not None
-                                  else np.unwrap(ang[ok]), None, poly_degree, outlier_k)
-                  & reject_outliers(t[ok], f[ok], None, poly_degree, outlier_k))
+        ok[ok] = reject_outliers(t[ok], np.cos(ang[ok]) if hd is not None
+                                 else np.unwrap(ang[ok]), None, poly_degree, outlier_k)
+        fin = ok & np.isfinite(f)
+        if fin.sum() > poly_degree + 2:  # a rejected frequency leaves its row's angle
+            f = f.copy()
+            bad = np.flatnonzero(fin)[~reject_outliers(t[fin], f[fin], None, poly_degree,
+                                                       outlier_k)]
+            f[bad] = np.nan
     t, ang, f, obs, ov = t[ok], ang[ok], f[ok], obs[ok], ov[ok]
     hd = None if hd is None else hd[ok]
-    if t.size < 6:
-        raise ValueError(f"bearings + frequency TMA needs at least 6 rows, {t.size} left")
+    has_f = np.isfinite(f)
+    if t.size < 6 or has_f.sum() < 3:
+        raise ValueError("bearings + frequency TMA needs at least 6 rows and 3 frequencies, "
+                         f"{t.size} and {int(has_f.sum())} left")
+    f = np.where(has_f, f, 0.0)        # rows without a frequency: weight 0 on it
     t0 = float(t[0] if t0 is None else t0)
     t1 = float(t[-1] if t1 is None else t1)
     tau = t - t0
@@ -208,9 +217,10 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     c = float(sound_speed)
     cr = c if retarded else None
     n = t.size
+    n_f = int(has_f.sum())
     sig = [sigma_rad or max(noise_scale(t, ang if hd is not None else np.unwrap(ang)), 1e-5),
-           sigma_hz or max(noise_scale(t, f), 1e-6)]
-    w = np.concatenate([np.full(n, 1.0 / sig[0]), np.full(n, 1.0 / sig[1])])
+           sigma_hz or max(noise_scale(t[has_f], f[has_f]), 1e-6)]
+    w = np.concatenate([np.full(n, 1.0 / sig[0]), has_f / sig[1]])
 
     def res(q: np.ndarray) -> np.ndarray:
         a, fm = _model(q, tau, obs, ov, hd, c, cr)
@@ -240,20 +250,21 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
                     recombination=0.9)
         x = search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
         g = doppler_factor(x, tau, obs, ov, c)
-        found[sides] = polish(np.append(x, np.sum(g * f) / np.sum(g * g)))  # eq. (BF2)
+        found[sides] = polish(np.append(x, np.sum(has_f * g * f)
+                                        / np.sum(has_f * g * g)))  # eq. (BF2)
 
     def cost(q: np.ndarray) -> float:
         return float(np.sum(res(q) ** 2))
 
     best = min(found, key=lambda k: cost(found[k]))
     for _ in range(2 if sigma_rad is None or sigma_hz is None else 0):
-        r = res(found[best]) / w                     # unweighted residuals of the best
-        dof = max(n - 2.5, 1.0)                      # the five parameters shared by the kinds
-        if sigma_rad is None:
-            sig[0] = max(float(np.sqrt(np.sum(r[:n] ** 2) / dof)), 1e-9)
+        r = res(found[best])                         # unweighted residuals of the best:
+        ra, rf = r[:n] / w[:n], r[n:][has_f] / w[n:][has_f]
+        if sigma_rad is None:                        # the five parameters shared by the kinds
+            sig[0] = max(float(np.sqrt(np.sum(ra**2) / max(n - 2.5, 1.0))), 1e-9)
         if sigma_hz is None:
-            sig[1] = max(float(np.sqrt(np.sum(r[n:] ** 2) / dof)), 1e-9)
-        w[:n], w[n:] = 1.0 / sig[0], 1.0 / sig[1]
+            sig[1] = max(float(np.sqrt(np.sum(rf**2) / max(n_f - 2.5, 1.0))), 1e-9)
+        w[:n], w[n:] = 1.0 / sig[0], has_f / sig[1]
         found = {k: polish(q) for k, q in found.items()}
         best = min(found, key=lambda k: cost(found[k]))
 
@@ -262,7 +273,7 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         wj = jac(q)
         sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
                               np.concatenate(_model(q, tau, obs, ov, hd, c, cr)), n_used=n,
-                              n_rejected=n_in - n, n_residuals=2 * n)
+                              n_rejected=n_in - n, n_residuals=n + n_f)
         sol.rss = float(np.sum((res(q)[:n] / w[:n]) ** 2))
         if sides[0]:
             sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"

@@ -16,10 +16,13 @@ rows at the track's times), ``compact`` (azimuth tracks of a volumetric/planar a
 :mod:`.compact`), or ``auto``: ``bearings_frequency`` for a track with line frequencies on at
 least ``min_rows`` of its rows, else ``bearings``.
 
-A track's frequencies are the ``freq_hz`` of the rows it used: a ``freq_hz`` column of the
-tracks group (the line frequency of the row each point used; NaN where it used a broadband
-row), or the tracked group's own ``freq_hz`` (a ``lines`` group). Without either the track
-has bearings alone.
+A track's frequencies: a tracks file of the lines+bearings tracker holds each point's
+measurement (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``, ``meas_freq_hz``, and
+``meas_tonal`` the tonal slot it updated); its rows are read from there, and the frequencies
+are those of the tonal slot most rows updated (one rest frequency ``f0``; the other rows, broadband
+bearings or other tonals, enter with their angle alone). A tracks file of bearings alone
+(``row`` indexes the products' ``bearings`` group, or the ``lines`` group named by
+``tma.group``, whose ``freq_hz`` then gives the frequencies) is read through its products file.
 
 Written here: the selection of a track's rows is the only new part; the solvers are shared.
 """
@@ -102,7 +105,7 @@ def _tracks_group(path: str) -> dict:
             raise FormatError(f"{path}: tracks column {k!r} is missing (per-track TMA needs "
                               "the multi-target tracker's tracks, type = 'multi')")
     meas = as_text(g["attrs"].get("measurements", "bearings"))
-    if meas != "bearings":
+    if meas not in ("bearings", "lines+bearings", "lines"):
         raise FormatError(f"{path}: per-track TMA solves bearing tracks; these tracks are of "
                           f"{meas!r}")
     return {"group": g, "root": prod["/"]}
@@ -138,6 +141,13 @@ def read_track_rows(tracks_path: str, cfg: dict[str, Any]) -> TrackRows:
     confirmed = np.unique(ids[status == _CONFIRMED])
     if confirmed.size == 0:
         raise FormatError(f"{tracks_path}: no confirmed track")
+    if "meas_cone_deg" in g:  # lines+bearings tracks: each point holds its measurement
+        out = {int(tid): _own_measurements(g, ids == tid, cfg) for tid in confirmed}
+        return TrackRows(out, products, rec, as_text(g["attrs"].get("measurements", "")),
+                         None)
+    if as_text(g["attrs"].get("measurements", "bearings")) != "bearings":
+        raise FormatError(f"{tracks_path}: lines tracks without their per-point measurements "
+                          "(meas_cone_deg …): their rows index two products groups")
     prod = read_products(products)
     name = cfg["group"] or as_text(g["attrs"].get("group", ""))
     if name:
@@ -151,30 +161,61 @@ def read_track_rows(tracks_path: str, cfg: dict[str, Any]) -> TrackRows:
         name = names[0]
     cols = bearing_columns(prod[name], products)
     n_rows = cols["time"].size
-    track_freq = (np.asarray(g["freq_hz"], float).reshape(-1) if "freq_hz" in g else None)
     cone_deg = (np.asarray(prod[name]["cone_deg"], float).reshape(-1)
                 if "cone_deg" in prod[name] else None)
     out = {}
     for tid in confirmed:
         sel = (ids == tid) & (rows >= 0)
-        r, first = np.unique(rows[sel], return_index=True)
+        r = np.unique(rows[sel])
         if np.any(r >= n_rows):
             raise FormatError(f"{tracks_path}: track {tid} uses row {int(r.max())} but the "
                               f"products group {name!r} has {n_rows} rows")
         if cfg["cone_gate"] is not None and cone_deg is not None:
-            keep = (cone_deg[r] >= cfg["cone_gate"][0]) & (cone_deg[r] <= cfg["cone_gate"][1])
-            r, first = r[keep], first[keep]
+            r = r[(cone_deg[r] >= cfg["cone_gate"][0]) & (cone_deg[r] <= cfg["cone_gate"][1])]
         r = r[np.argsort(cols["time"][r], kind="stable")]
         _, uniq = np.unique(cols["time"][r], return_index=True)   # one row per time
         r = r[uniq]
         m = select_rows(cols, r)
-        if track_freq is not None:  # the line frequency of the row each point used
-            pts = np.flatnonzero(sel)
-            f_of = dict(zip(rows[pts].tolist(), track_freq[pts].tolist(), strict=True))
-            m["freq"] = np.array([f_of[int(k)] for k in r])
         m["rows"] = r
         out[int(tid)] = m
     return TrackRows(out, products, rec, name, prod)
+
+
+def _own_measurements(g: dict, mask: np.ndarray, cfg: dict[str, Any]) -> dict[str, Any]:
+    """One track's measurements from a tracks group that holds them per point
+    (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``, ``meas_freq_hz``,
+    ``meas_tonal``): the points that used a row, one per time; ``freq`` the frequencies of
+    the tonal slot that most rows updated (NaN on the other rows: broadband bearings or other
+    tonals), None when no row has one."""
+    used = mask & (np.asarray(g["row"]).reshape(-1) >= 0)
+    if "row_kind" in g:
+        used &= np.asarray(g["row_kind"]).reshape(-1) >= 0
+    idx = np.flatnonzero(used)
+    t = np.asarray(g["time"], float).reshape(-1)
+    idx = idx[np.argsort(t[idx], kind="stable")]
+    _, first = np.unique(t[idx], return_index=True)
+    idx = idx[first]
+    col = {k: np.asarray(g[k], float).reshape(-1)[idx] if k in g else None
+           for k in ("meas_cone_deg", "meas_port_deg", "meas_stbd_deg", "meas_freq_hz")}
+    if cfg["cone_gate"] is not None:
+        keep = (col["meas_cone_deg"] >= cfg["cone_gate"][0]) & \
+            (col["meas_cone_deg"] <= cfg["cone_gate"][1])
+        idx = idx[keep]
+        col = {k: None if v is None else v[keep] for k, v in col.items()}
+    freq = None
+    f = col["meas_freq_hz"]
+    if f is not None and np.any(np.isfinite(f)):
+        slot = (np.asarray(g["meas_tonal"]).reshape(-1)[idx] if "meas_tonal" in g
+                else np.zeros(idx.size, np.int64))
+        on = np.isfinite(f) & (slot >= 0)
+        if on.any():
+            best = np.bincount(slot[on]).argmax()
+            freq = np.where(on & (slot == best), f, np.nan)
+    cols = {"time": t[idx], "port": col["meas_port_deg"], "stbd": col["meas_stbd_deg"],
+            "azimuth": None, "freq": freq}
+    m = select_rows(cols, np.arange(idx.size))
+    m["rows"] = np.asarray(g["row"]).reshape(-1)[idx]
+    return m
 
 
 def track_method(meas: dict[str, Any], cfg: dict[str, Any]) -> str:
@@ -189,6 +230,8 @@ def track_method(meas: dict[str, Any], cfg: dict[str, Any]) -> str:
 
 def _delays_rows(tr: TrackRows, meas: dict[str, Any], path: str) -> dict[str, Any]:
     """The products' delays rows at the track's times (within 1 µs)."""
+    if tr.prod is None:
+        tr.prod = read_products(tr.products)
     names = groups_of_kind(tr.prod, "delays")
     if len(names) != 1:
         raise ConfigError(f"{path}: tma.method = 'delays' needs one delays group in "
@@ -215,9 +258,6 @@ def _solve_track(tid: int, meas: dict[str, Any], tr: TrackRows, rec: Recording,
             warnings.warn(f"track {tid}: no line frequencies: not solved by "
                           "bearings_frequency", stacklevel=3)
             return None
-        ok = np.isfinite(f)
-        meas = {k: (v[ok] if isinstance(v, np.ndarray) and v.shape[:1] == ok.shape else v)
-                for k, v in meas.items()}
     if method == "delays":
         meas = _delays_rows(tr, meas, config_path)
     t = meas["time"]
@@ -265,7 +305,7 @@ def run_tracks_tma(tracks_path: str, config_path: str, output_path: str,
         raise ConfigError(f"{config_path}: tma.method = 'bearings_frequency' but no confirmed "
                           f"track of {tracks_path} has line frequencies (use 'bearings' or "
                           "'auto')")
-    rec_path = tr.recording or as_text(tr.prod["/"].get("source", ""))
+    rec_path = tr.recording or as_text(read_products(tr.products)["/"].get("source", ""))
     if not rec_path:
         raise ConfigError(f"{config_path}: tma.recording is needed (the tracks file names no "
                           "recording)")

@@ -14,8 +14,10 @@ eq. (BF1)) plus noise.
 from __future__ import annotations
 
 import os
+import shutil
 from dataclasses import dataclass
 
+import h5py
 import numpy as np
 
 from arrayproc.io.products import ProductsWriter
@@ -26,7 +28,7 @@ from .bf_tma import doppler_factor
 from .motion import axial_speed, nav_velocity
 from .scenarios import OwnTrack
 
-__all__ = ["Source", "emission_lag", "write_line_array_scenario"]
+__all__ = ["Source", "emission_lag", "write_line_array_scenario", "with_measurements"]
 
 
 @dataclass(frozen=True)
@@ -144,3 +146,29 @@ def write_line_array_scenario(folder: str, nav: OwnTrack, sources: dict[str, Sou
                 snr_db=np.full(m, 15.0), beam=np.zeros(m, np.int64))
     return rec, prod, {"source": a["src"].astype(np.int64), "freq_hz": a["freq"],
                        "time": a["time"]}
+
+
+def with_measurements(tracks: str | os.PathLike, out: str | os.PathLike, prod: str,
+                      freq: np.ndarray) -> None:
+    """Copy a bearings tracks file adding the columns of a lines+bearings tracks file: each
+    point's measurement (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``), its
+    frequency ``meas_freq_hz`` (``freq`` of the row it used), ``meas_tonal`` (slot 0) and
+    ``row_kind`` (1 lines; −1 coasted); ``measurements`` = ``lines+bearings``. For checking
+    the per-track TMA on measurement-level tracks as the lines+bearings tracker writes them
+    (:mod:`.per_track`)."""
+    shutil.copy(tracks, out)
+    with h5py.File(prod, "r") as p:
+        b = {k: p[f"bearings/{k}"][()] for k in ("cone_deg", "bearing_port_deg",
+                                                 "bearing_stbd_deg")}
+    with h5py.File(out, "a") as f:
+        r = f["tracks/row"][()]
+        on = r >= 0
+        rs = np.maximum(r, 0)
+        g = f["tracks"]
+        for k, col in (("meas_cone_deg", "cone_deg"), ("meas_port_deg", "bearing_port_deg"),
+                       ("meas_stbd_deg", "bearing_stbd_deg")):
+            g.create_dataset(k, data=np.where(on, b[col][rs], np.nan))
+        g.create_dataset("meas_freq_hz", data=np.where(on, freq[rs], np.nan))
+        g.create_dataset("meas_tonal", data=np.where(on, 0, -1).astype(np.int64))
+        g.create_dataset("row_kind", data=np.where(on, 1, -1).astype(np.int8))
+        g.attrs["measurements"] = "lines+bearings"

@@ -7,7 +7,6 @@ tracked by the shipped multi-target tracker."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import h5py
@@ -15,7 +14,7 @@ import numpy as np
 
 from arrayproc.data import data_path
 from arrayproc.track.batch import scenarios as S
-from arrayproc.track.batch.synthetic import Source, write_line_array_scenario
+from arrayproc.track.batch.synthetic import Source, with_measurements, write_line_array_scenario
 from arrayproc.track.runner import run_tracker
 
 B_STATE = np.array([2500.0, 0.0, -3.0, 0.0])
@@ -26,8 +25,9 @@ SIG_DEG, SIG_HZ = 0.5, 0.05
 
 
 def build(folder: Path, seed: int) -> dict[str, Path | dict]:
-    """Recording, products and tracks (``tracks.h5``: bearings alone; ``tracks_f.h5``: the
-    same tracks with the line frequency of the row each point used, column ``freq_hz``)."""
+    """Recording, products and tracks in ``folder``: ``tracks``, the bearings tracks;
+    ``tracks_f``, the same tracks holding each point's measurement with its line frequency, as
+    the lines+bearings tracker writes them (:func:`with_measurements`)."""
     folder.mkdir(parents=True, exist_ok=True)
     nav, _ = S.endfire_turn_track(n=626, dt=1.0)
     rec, prod, rows = write_line_array_scenario(str(folder), nav, SOURCES,
@@ -36,11 +36,7 @@ def build(folder: Path, seed: int) -> dict[str, Path | dict]:
     tracks = folder / "tracks.h5"
     run_tracker(prod, str(Path(data_path("trackers")) / "multi_target.toml"), str(tracks))
     tracks_f = folder / "tracks_f.h5"
-    shutil.copy(tracks, tracks_f)
-    with h5py.File(tracks_f, "a") as f:
-        r = f["tracks/row"][()]
-        f["tracks"].create_dataset("freq_hz", data=np.where(
-            r >= 0, rows["freq_hz"][np.maximum(r, 0)], np.nan))
+    with_measurements(tracks, tracks_f, prod, rows["freq_hz"])
     return {"rec": Path(rec), "prod": Path(prod), "tracks": tracks, "tracks_f": tracks_f,
             "rows": rows}
 

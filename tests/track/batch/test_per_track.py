@@ -130,6 +130,7 @@ def test_nees_small_set(tmp_path):
 def test_nees_fifty_seeds(tmp_path):
     """Mean NEES over 50 seeds × 2 tracks within [0.5, 2] × the state dimension."""
     m, n = _nees_over(range(100, 150), tmp_path, 'method = "auto"\n')
+    print(f"mean NEES over {n} solutions: {m}")
     assert n == {4: 100, 5: 100}
     assert 0.5 * 4 < m[4] < 2 * 4, m
     assert 0.5 * 5 < m[5] < 2 * 5, m
@@ -159,3 +160,46 @@ def test_cli_errors(scene, tmp_path, capsys):
                  "no confirmed track", out)
     dl = _cfg(tmp_path, 'method = "delays"\n', "dl.toml")
     _check_error(["tma", scene["tracks"], "-c", dl, "-o", out], capsys, "delays group", out)
+
+
+def test_plot_per_track(scene, tmp_path):
+    """`plot TMA.h5` of a per-track group: the plan view with each track's solution and its
+    CRLB ellipses, and the measured against fitted cone angles."""
+    cfg = _cfg(tmp_path, 'method = "auto"\n' + QUICK)
+    out = tmp_path / "tma.h5"
+    run_tracks_tma(str(scene["tracks"]), cfg, str(out))
+    png = tmp_path / "tma.png"
+    assert main(["plot", str(out), "-o", str(png), "-q"]) == 0
+    assert png.stat().st_size > 20_000
+
+
+def test_same_as_the_products_path_on_the_endfire_turn(tmp_path):
+    """One source crossing end-fire in the turn: the per-track solution over the track's rows
+    equals the products path's over the products' rows (bearings: the bearings group;
+    bearings + frequency: the lines group against the tracks' per-point measurements)."""
+    from arrayproc.track.batch import scenarios as S
+    from arrayproc.track.batch.run import run_tma
+    from arrayproc.track.batch.synthetic import (
+        Source,
+        with_measurements,
+        write_line_array_scenario,
+    )
+    from arrayproc.track.runner import run_tracker
+
+    nav, _ = S.endfire_turn_track(n=626, dt=1.0)
+    _, prod, rows = write_line_array_scenario(
+        str(tmp_path), nav, {"a": Source(S.ENDFIRE_SOURCE, 300.0)}, np.arange(0.0, 626.0, 5.0),
+        T.SIG_DEG, T.SIG_HZ, seed=3, lines=True)
+    tracks, tracks_f = tmp_path / "tracks.h5", tmp_path / "tracks_f.h5"
+    run_tracker(prod, f"{data_path('trackers')}/multi_target.toml", str(tracks))
+    with_measurements(tracks, tracks_f, prod, rows["freq_hz"])
+    quick = "popsize = 6\nmaxiter = 50\nmin_rows = 20\n"
+    for method, trk in (("bearings", tracks), ("bearings_frequency", tracks_f)):
+        cfg = _cfg(tmp_path, f'method = "{method}"\n' + quick, f"{method}.toml")
+        a = run_tma(prod, cfg, str(tmp_path / f"p_{method}.h5"))[0]
+        (tid, b), *_ = run_tracks_tma(str(trk), cfg, str(tmp_path / f"t_{method}.h5"))
+        assert b.n_used == a.n_used == 126 - a.n_rejected
+        np.testing.assert_allclose(b.state, a.state, rtol=1e-9)
+        np.testing.assert_allclose(b.crlb, a.crlb, rtol=1e-9)
+        e = a.state - T.TRUTH[0][:a.state.size]
+        assert e @ np.linalg.solve(a.crlb, e) < chi2.ppf(0.997, a.state.size)
