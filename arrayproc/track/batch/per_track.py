@@ -29,8 +29,8 @@ Written here: the selection of a track's rows is the only new part; the solvers 
 
 from __future__ import annotations
 
+import logging
 import os
-import sys
 import warnings
 from typing import Any
 
@@ -54,6 +54,8 @@ from .run import (
     with_unresolved_mirrors,
     write_tma,
 )
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["is_tracks_file", "TrackRows", "read_track_rows", "track_method", "run_tracks_tma"]
 
@@ -325,10 +327,9 @@ def run_tracks_tma(tracks_path: str, config_path: str, output_path: str,
                 sols.append(s)
                 ids.append(tid)
             if progress:
-                print(f"tma track {tid} {sol.method}: x {sol.state[0]:9.1f} y "
-                      f"{sol.state[1]:9.1f} m, course {sol.heading_deg:5.1f} deg, speed "
-                      f"{sol.speed_mps:5.2f} m/s, range σ {sol.range_sigma:8.1f} m",
-                      file=sys.stderr)
+                _log.info(f"tma track {tid} {sol.method}: x {sol.state[0]:9.1f} y "
+                          f"{sol.state[1]:9.1f} m, course {sol.heading_deg:5.1f} deg, speed "
+                          f"{sol.speed_mps:5.2f} m/s, range σ {sol.range_sigma:8.1f} m")
     if not sols:
         raise FormatError(f"{tracks_path}: no confirmed track with tma.min_rows = "
                           f"{cfg['min_rows']} rows over tma.min_duration_s = "
