@@ -24,7 +24,7 @@ from arrayproc.track.multi.positions import positions_manager
 from arrayproc.track.multi.tma import tma_track
 from arrayproc.track.state import Context
 
-__all__ = ["multi_target", "run_multi", "confirmed_status"]
+__all__ = ["multi_target", "run_multi", "confirmed_status", "effective_config"]
 
 
 def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarray]:
@@ -82,8 +82,6 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     kind = cfg["measurements"]
     if kind == "bearings":
         return _bearings(prod, products_path, cfg, tma_cfg, nav)
-    if kind == "lines+bearings" and not _has_lines(prod):
-        return _bearings(prod, products_path, cfg, tma_cfg, nav)
     if kind in ("lines+bearings", "lines"):
         return _lines(prod, products_path, cfg, tma_cfg, nav)
     if kind == "contacts":
@@ -125,23 +123,26 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
     return [tr for tr in tracks if not tr.meta.get("skipped")], out
 
 
-def _has_lines(prod: dict) -> bool:
-    """Products that ``lines+bearings`` can use: a ``lines`` group beside cone-angle bearings.
-    Otherwise (no lines stage in the chain; relative-bearing beams, whose rows are resolved
-    to their side) a warning, and the bearings are tracked alone."""
+def effective_config(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]:
+    """The multi settings ``cfg`` for a products file: ``lines+bearings`` needs a ``lines``
+    group beside cone-angle bearings; otherwise (no lines stage in the chain; relative-bearing
+    beams, whose rows are resolved to their side) a warning, and the bearings alone."""
     import warnings
 
-    from arrayproc.io.schema import groups_of_kind as kinds
+    from arrayproc.io.products import read_products
 
-    has = bool(kinds(prod, "lines"))
-    sided = any("side" in prod[g] for g in kinds(prod, "bearings"))
+    if cfg["measurements"] != "lines+bearings":
+        return cfg
+    prod = read_products(products_path)
+    has = bool(groups_of_kind(prod, "lines"))
+    sided = any("side" in prod[g] for g in groups_of_kind(prod, "bearings"))
     if has and not sided:
-        return True
-    warnings.warn("tracker.measurements = 'lines+bearings': " + (
+        return cfg
+    warnings.warn(f"{products_path}: tracker.measurements = 'lines+bearings': " + (
         "the bearings are resolved to their side (relative-bearing beams)" if sided else
         "the products have no lines group (no lines stage in the chain)")
-        + "; tracking the bearings alone", stacklevel=3)
-    return False
+        + "; tracking the bearings alone", stacklevel=2)
+    return dict(cfg, measurements="bearings")
 
 
 def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any],
@@ -291,6 +292,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     elif cfg["measurements"] != "positions":
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
                           "set tracker.nav")
+    cfg = effective_config(products_path, cfg)
     tracks, rows = multi_target(products_path, cfg, tma_cfg, nav)
     if progress:
         n_conf = sum(tr.confirmed_at is not None for tr in tracks)

@@ -183,3 +183,32 @@ def test_same_seed_same_tracks():
         ha, hb = ta.arrays(), tb.arrays()
         assert np.array_equal(ha["meas"], hb["meas"])
         assert np.array_equal(ha["x"], hb["x"], equal_nan=True)
+
+
+def test_products_without_lines_are_tracked_as_bearings(tmp_path):
+    """The shipped tracker (lines+bearings) on products without a lines group: a warning, and
+    the tracks of ``measurements = "bearings"`` bit for bit."""
+    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.track.runner import run_tracker
+    from tests.track.test_runner import _write_inputs
+
+    rec, full, _ = _write_inputs(tmp_path)
+    g = read_products(str(full))["bearings"]
+    keep = np.asarray(g["time"]) < 400.0                   # a short run: the first 400 s
+    prod = tmp_path / "short.h5"
+    with ProductsWriter(prod, source=str(rec)) as w:
+        w.group("bearings", "bearings").append(**{k: np.asarray(g[k])[keep] for k in g
+                                                  if k not in ("kind", "stage", "attrs")})
+    shipped = os.path.join(DATA, "multi_target.toml")
+    text = open(shipped, encoding="utf-8").read()
+    assert 'measurements = "lines+bearings"' in text
+    only = tmp_path / "bearings.toml"
+    only.write_text(text.replace('measurements = "lines+bearings"', 'measurements = "bearings"'))
+    with pytest.warns(UserWarning, match="no lines group"):
+        run_tracker(str(prod), shipped, str(tmp_path / "a.h5"))
+    run_tracker(str(prod), str(only), str(tmp_path / "b.h5"))
+    a, b = read_products(str(tmp_path / "a.h5"))["tracks"], \
+        read_products(str(tmp_path / "b.h5"))["tracks"]
+    assert a["time"].size > 0 and set(a) == set(b)
+    for k in ("time", "track_id", "x", "y", "cov", "status", "row"):
+        assert np.array_equal(np.asarray(a[k]), np.asarray(b[k]), equal_nan=True), k
