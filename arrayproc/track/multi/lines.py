@@ -28,14 +28,15 @@ from arrayproc.geo.nav import Nav
 from arrayproc.io.schema import groups_of_kind
 from arrayproc.track.manage.tracks import Status, Track
 from arrayproc.track.multi.bearings import bearing_scans
+from arrayproc.track.multi.stitch import stitch_by_tonals
 from arrayproc.track.multi.tonals import (
     TonalBank,
+    TonalDistinct,
     TonalGNN,
     birth_tonals,
     line_sigma_deg,
     tonal_bearing_bank,
     tonal_slots,
-    tonals_distinct,
 )
 from arrayproc.track.state import Context
 
@@ -172,7 +173,9 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     ``meta`` of every track: ``rows`` (row of the measurement table per history point, −1
     coasted), ``cone``, ``sigma_cone``, ``stbd_weight`` (as bearings mode), ``f_hz`` and
     ``sigma_f_hz`` (n, K) its tonals' received frequencies (NaN: empty slot) and
-    ``meas_tonal`` (n,) the slot nearest the point's measured frequency (−1: none)."""
+    ``meas_tonal`` (n,) the slot nearest the point's measured frequency (−1: none). Segments
+    of one source are joined by their tonals
+    (:func:`~arrayproc.track.multi.stitch.stitch_by_tonals`)."""
     from arrayproc.track.manage.delete import DeletionRule
     from arrayproc.track.manage.manager import TrackManager
     from arrayproc.track.manage.mirrored import mirrored_cone, mirrored_initial
@@ -195,7 +198,8 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         if not assoc.may_start(Z, j, t):
             return None
         xb, Pb, lw = mirrored_initial(Z[:, :3], j, float(Z[j, 4]), smin, sr)
-        x, P = filt.initial(xb, Pb, birth_tonals(Z, j, merge, K), float(ll["sigma_rate_hz_s"]))
+        f0 = birth_tonals(Z, j, K, float(ll["adopt_d2"]))
+        x, P = filt.initial(xb, Pb, f0, float(ll["sigma_rate_hz_s"]))
         return x, P, lw
 
     ts = np.array([t for t, _Z, _r in scans])
@@ -205,16 +209,19 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         qmul = 1.0 + (np.degrees(rate) / float(b["turn_ref_deg_s"])) ** 2
     hw = cfg.get("hit_window")
     window = {} if hw is None else {"window": int(hw[1]), "min_hits": int(hw[0])}
-    gate_hz = 3.0 * float(ll["sigma_hz"])
+    distinct = TonalDistinct(filt, float(ll["same_source_deg"]), int(ll["same_source_scans"]))
     delete = DeletionRule(max_misses=cfg["max_misses"], **window, pos=(0, 1, 2, 3),
-                          merge_d2=float(b["merge_d2"]), distinct=tonals_distinct(K, gate_hz))
+                          merge_d2=float(b["merge_d2"]), distinct=distinct)
     mgr = TrackManager(filt, init, assoc,
                        confirm=cfg["confirm"], delete=delete)
     for k, (t, Z, _rows) in enumerate(scans):
         assoc.confirmed = np.array([tr.status is Status.CONFIRMED for tr in mgr.live], bool)
         mgr.step(t, Z, Context(np.zeros(4), t=float(t), q_scale=float(qmul[k])))
+        distinct.absorb(mgr.tracks)
     at = {t: (Z, r) for t, Z, r in scans}
-    for tr in mgr.tracks:
+    tracks = stitch_by_tonals(mgr.tracks, K, float(ll["reid_s"]), float(ll["reid_hz"]),
+                              float(ll["reid_deg"]))
+    for tr in tracks:
         h = tr.arrays()
         rows = np.full(h["meas"].size, -1, np.int64)
         fz = np.full(h["meas"].size, np.nan)
@@ -235,5 +242,5 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
                                   np.ascontiguousarray(h["P"][:, :4, :4]), h["logw"],
                                   np.degrees(hh))
         tr.meta["cone"], tr.meta["sigma_cone"], tr.meta["stbd_weight"] = c, sc, ws
-    return mgr.tracks
+    return tracks
 
