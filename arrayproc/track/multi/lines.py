@@ -40,7 +40,8 @@ from arrayproc.track.multi.tonals import (
 )
 from arrayproc.track.state import Context
 
-__all__ = ["line_table", "line_scans", "track_lines", "KIND_BEARINGS", "KIND_LINES"]
+__all__ = ["line_table", "line_scans", "snapshot_times", "track_lines", "KIND_BEARINGS",
+           "KIND_LINES"]
 
 #: ``row_kind`` of a track point updated by a broadband bearing / by a line contact
 KIND_BEARINGS, KIND_LINES = 0, 1
@@ -76,6 +77,16 @@ def _broadband(g: dict) -> np.ndarray:
         return np.ones(n, bool)
     w = np.asarray(g["freq_hi"], float) - np.asarray(g["freq_lo"], float)
     return w >= np.nanmax(w) * (1 - 1e-9)
+
+
+def snapshot_times(prod: dict) -> np.ndarray:
+    """Times (s) of the integrated snapshots of a products file (its ``btr`` or ``lofar``
+    groups), empty when it has none."""
+    for kind in ("btr", "lofar"):
+        groups = groups_of_kind(prod, kind)
+        if groups:
+            return np.unique(np.asarray(prod[groups[0]]["time"], float))
+    return np.zeros(0)
 
 
 def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any]
@@ -119,12 +130,13 @@ def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dic
     return out
 
 
-def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
-               ) -> list[tuple[float, np.ndarray, np.ndarray]]:
+def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any],
+               times: np.ndarray | None = None) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """Scans (t, Z (k, 5), rows of ``m``) in time order: the broadband rows of each time merged
     within ``tracker.bearing.merge_deg``
     (:func:`~arrayproc.track.multi.bearings.bearing_scans`), then every line contact (module
-    doc)."""
+    doc); ``times`` (s) are scans too, empty when they hold no row (the snapshots of the
+    products: a miss for every track)."""
     merge_deg = float(cfg["bearing"]["merge_deg"])
     ll = cfg["lines"]
     sig = np.where(m["kind"] == KIND_LINES,
@@ -143,9 +155,11 @@ def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
         cuts = np.flatnonzero(np.diff(m["time"][order]) != 0) + 1
         for seg in np.split(order, cuts):
             by_t.setdefault(float(m["time"][seg[0]]), []).append(seg)
+    for t in np.asarray([] if times is None else times, float):
+        by_t.setdefault(float(t), [])
     out = []
     for t in sorted(by_t):
-        rows = np.concatenate(by_t[t]).astype(np.int64)
+        rows = np.concatenate(by_t[t] or [np.zeros(0, np.int64)]).astype(np.int64)
         Z = np.stack([m["cone_deg"][rows], m["bearing_port_deg"][rows],
                       m["bearing_stbd_deg"][rows], m["freq_hz"][rows], sig[rows]], 1)
         out.append((t, Z, rows))

@@ -149,10 +149,10 @@ def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[st
            nav: Nav | None) -> Result:
     """Line contacts (and broadband bearings) → scans → tracks with tonal slots → one TMA per
     track, each point with its measurement (:func:`_measurement_columns`)."""
-    from arrayproc.track.multi.lines import line_scans, line_table, track_lines
+    from arrayproc.track.multi.lines import line_scans, line_table, snapshot_times, track_lines
 
     m = line_table(prod, products_path, cfg, tma_cfg)
-    scans = line_scans(m, cfg)
+    scans = line_scans(m, cfg, snapshot_times(prod))
     tracks = track_lines(scans, cfg, nav, _sound_speed(products_path))
     out, kept = [], []
     for tr in tracks:
