@@ -40,8 +40,8 @@ from arrayproc.track.multi.tonals import (
 )
 from arrayproc.track.state import Context
 
-__all__ = ["line_table", "line_scans", "snapshot_times", "track_lines", "KIND_BEARINGS",
-           "KIND_LINES"]
+__all__ = ["line_table", "line_scans", "row_sigma_deg", "snapshot_times", "track_lines",
+           "KIND_BEARINGS", "KIND_LINES"]
 
 #: ``row_kind`` of a track point updated by a broadband bearing / by a line contact
 KIND_BEARINGS, KIND_LINES = 0, 1
@@ -130,6 +130,18 @@ def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dic
     return out
 
 
+def row_sigma_deg(m: dict[str, np.ndarray], cfg: dict[str, Any]) -> np.ndarray:
+    """Cone σ at broadside (deg) of every row of the measurement table: a line's from its
+    frequency and SNR (:func:`~arrayproc.track.multi.tonals.line_sigma_deg`), a broadband
+    row's ``tracker.bearing.sigma_cone_deg``."""
+    ll = cfg["lines"]
+    return np.where(m["kind"] == KIND_LINES,
+                    line_sigma_deg(np.nan_to_num(m["freq_hz"], nan=1.0), m["snr_db"],
+                                   float(ll["sigma_line_deg_hz"]),
+                                   float(ll["min_sigma_line_deg"])),
+                    float(cfg["bearing"]["sigma_cone_deg"]))
+
+
 def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any],
                times: np.ndarray | None = None) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """Scans (t, Z (k, 5), rows of ``m``) in time order: the broadband rows of each time merged
@@ -138,12 +150,7 @@ def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any],
     doc); ``times`` (s) are scans too, empty when they hold no row (the snapshots of the
     products: a miss for every track)."""
     merge_deg = float(cfg["bearing"]["merge_deg"])
-    ll = cfg["lines"]
-    sig = np.where(m["kind"] == KIND_LINES,
-                   line_sigma_deg(np.nan_to_num(m["freq_hz"], nan=1.0), m["snr_db"],
-                                  float(ll["sigma_line_deg_hz"]),
-                                  float(ll["min_sigma_line_deg"])),
-                   float(cfg["bearing"]["sigma_cone_deg"]))
+    sig = row_sigma_deg(m, cfg)
     bb = np.flatnonzero(m["kind"] == KIND_BEARINGS)
     ln = np.flatnonzero(m["kind"] == KIND_LINES)
     score = np.where(np.isfinite(m["snr_db"]), m["snr_db"], -np.inf)

@@ -149,14 +149,26 @@ def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[st
            nav: Nav | None) -> Result:
     """Line contacts (and broadband bearings) → scans → tracks with tonal slots → one TMA per
     track, each point with its measurement (:func:`_measurement_columns`)."""
-    from arrayproc.track.multi.lines import line_scans, line_table, snapshot_times, track_lines
+    from arrayproc.track.multi.lines import (
+        line_scans,
+        line_table,
+        row_sigma_deg,
+        snapshot_times,
+        track_lines,
+    )
 
     m = line_table(prod, products_path, cfg, tma_cfg)
     scans = line_scans(m, cfg, snapshot_times(prod))
     tracks = track_lines(scans, cfg, nav, _sound_speed(products_path))
+    sig = row_sigma_deg(m, cfg) / np.maximum(np.sin(np.deg2rad(m["cone_deg"])),
+                                             float(cfg["bearing"]["min_sigma_sin"]))
     out, kept = [], []
     for tr in tracks:
-        rows = tma_track(tr, m, nav, tma_cfg, by_side=True)
+        r = tr.meta["rows"][tr.meta["rows"] >= 0]
+        # the TMA's bearing σ: the filter's, or the RMS cone σ of the track's rows if larger
+        s_rows = float(np.sqrt(np.mean(sig[r] ** 2))) if r.size else 0.0
+        cfg_tr = dict(tma_cfg, sigma_bearing_deg=max(float(tma_cfg["sigma_bearing_deg"]), s_rows))
+        rows = tma_track(tr, m, nav, cfg_tr, by_side=True)
         if rows is None:
             continue
         out.append(_measurement_columns(tr, m, rows))
