@@ -56,6 +56,11 @@ Config (``[tracker]`` keys beside those of single mode)::
     max_age_s = 60.0
     adopt_d2 = 1.0
     min_snr_db = 0.0
+    same_source_deg = 1.0         # disjoint-tonal tracks together this long are one source
+    same_source_scans = 10
+    reid_s = 120.0                # a track continuing another after a gap (tonal signature)
+    reid_hz = 1.0
+    reid_deg = 20.0
     [tracker.contacts]
     sigma_bearing_deg = 2.0
     sigma_range_m = 20.0

@@ -69,6 +69,18 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
                           "only track near it as a new tonal", check=positive),
         "min_snr_db": Param("float", 0.0, "only lines with snr_db at least this (> 0) enter",
                             check=positive, unit="dB"),
+        "same_source_deg": Param("float", 1.0, "confirmed tracks with disjoint tonals whose "
+                                 "mirror bearings stay this close for same_source_scans "
+                                 "scans are one source and merge", check=positive,
+                                 unit="deg"),
+        "reid_s": Param("float", 120.0, "a confirmed track that starts within this of the "
+                        "end of another, with a tonal within reid_hz and a mirror bearing "
+                        "within reid_deg of its last, continues it", check=positive, unit="s"),
+        "reid_hz": Param("float", 1.0, "see reid_s", check=positive, unit="Hz"),
+        "reid_deg": Param("float", 20.0, "see reid_s", check=positive, unit="deg"),
+        "same_source_scans": Param("int", 10, "see same_source_deg",
+                                   check=lambda v: None if v >= 1
+                                   else "must be an integer >= 1"),
     },
     "positions": {
         "q": _f(0.01, "acceleration noise, m²/s³"),

@@ -28,18 +28,20 @@ from arrayproc.geo.nav import Nav
 from arrayproc.io.schema import groups_of_kind
 from arrayproc.track.manage.tracks import Status, Track
 from arrayproc.track.multi.bearings import bearing_scans
+from arrayproc.track.multi.stitch import stitch_by_tonals
 from arrayproc.track.multi.tonals import (
     TonalBank,
+    TonalDistinct,
     TonalGNN,
     birth_tonals,
     line_sigma_deg,
     tonal_bearing_bank,
     tonal_slots,
-    tonals_distinct,
 )
 from arrayproc.track.state import Context
 
-__all__ = ["line_table", "line_scans", "track_lines", "KIND_BEARINGS", "KIND_LINES"]
+__all__ = ["line_table", "line_scans", "row_sigma_deg", "snapshot_times", "track_lines",
+           "KIND_BEARINGS", "KIND_LINES"]
 
 #: ``row_kind`` of a track point updated by a broadband bearing / by a line contact
 KIND_BEARINGS, KIND_LINES = 0, 1
@@ -75,6 +77,16 @@ def _broadband(g: dict) -> np.ndarray:
         return np.ones(n, bool)
     w = np.asarray(g["freq_hi"], float) - np.asarray(g["freq_lo"], float)
     return w >= np.nanmax(w) * (1 - 1e-9)
+
+
+def snapshot_times(prod: dict) -> np.ndarray:
+    """Times (s) of the integrated snapshots of a products file (its ``btr`` or ``lofar``
+    groups), empty when it has none."""
+    for kind in ("btr", "lofar"):
+        groups = groups_of_kind(prod, kind)
+        if groups:
+            return np.unique(np.asarray(prod[groups[0]]["time"], float))
+    return np.zeros(0)
 
 
 def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any]
@@ -118,19 +130,27 @@ def line_table(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dic
     return out
 
 
-def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
-               ) -> list[tuple[float, np.ndarray, np.ndarray]]:
+def row_sigma_deg(m: dict[str, np.ndarray], cfg: dict[str, Any]) -> np.ndarray:
+    """Cone σ at broadside (deg) of every row of the measurement table: a line's from its
+    frequency and SNR (:func:`~arrayproc.track.multi.tonals.line_sigma_deg`), a broadband
+    row's ``tracker.bearing.sigma_cone_deg``."""
+    ll = cfg["lines"]
+    return np.where(m["kind"] == KIND_LINES,
+                    line_sigma_deg(np.nan_to_num(m["freq_hz"], nan=1.0), m["snr_db"],
+                                   float(ll["sigma_line_deg_hz"]),
+                                   float(ll["min_sigma_line_deg"])),
+                    float(cfg["bearing"]["sigma_cone_deg"]))
+
+
+def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any],
+               times: np.ndarray | None = None) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """Scans (t, Z (k, 5), rows of ``m``) in time order: the broadband rows of each time merged
     within ``tracker.bearing.merge_deg``
     (:func:`~arrayproc.track.multi.bearings.bearing_scans`), then every line contact (module
-    doc)."""
+    doc); ``times`` (s) are scans too, empty when they hold no row (the snapshots of the
+    products: a miss for every track)."""
     merge_deg = float(cfg["bearing"]["merge_deg"])
-    ll = cfg["lines"]
-    sig = np.where(m["kind"] == KIND_LINES,
-                   line_sigma_deg(np.nan_to_num(m["freq_hz"], nan=1.0), m["snr_db"],
-                                  float(ll["sigma_line_deg_hz"]),
-                                  float(ll["min_sigma_line_deg"])),
-                   float(cfg["bearing"]["sigma_cone_deg"]))
+    sig = row_sigma_deg(m, cfg)
     bb = np.flatnonzero(m["kind"] == KIND_BEARINGS)
     ln = np.flatnonzero(m["kind"] == KIND_LINES)
     score = np.where(np.isfinite(m["snr_db"]), m["snr_db"], -np.inf)
@@ -142,9 +162,11 @@ def line_scans(m: dict[str, np.ndarray], cfg: dict[str, Any]
         cuts = np.flatnonzero(np.diff(m["time"][order]) != 0) + 1
         for seg in np.split(order, cuts):
             by_t.setdefault(float(m["time"][seg[0]]), []).append(seg)
+    for t in np.asarray([] if times is None else times, float):
+        by_t.setdefault(float(t), [])
     out = []
     for t in sorted(by_t):
-        rows = np.concatenate(by_t[t]).astype(np.int64)
+        rows = np.concatenate(by_t[t] or [np.zeros(0, np.int64)]).astype(np.int64)
         Z = np.stack([m["cone_deg"][rows], m["bearing_port_deg"][rows],
                       m["bearing_stbd_deg"][rows], m["freq_hz"][rows], sig[rows]], 1)
         out.append((t, Z, rows))
@@ -172,7 +194,9 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     ``meta`` of every track: ``rows`` (row of the measurement table per history point, −1
     coasted), ``cone``, ``sigma_cone``, ``stbd_weight`` (as bearings mode), ``f_hz`` and
     ``sigma_f_hz`` (n, K) its tonals' received frequencies (NaN: empty slot) and
-    ``meas_tonal`` (n,) the slot nearest the point's measured frequency (−1: none)."""
+    ``meas_tonal`` (n,) the slot nearest the point's measured frequency (−1: none). Segments
+    of one source are joined by their tonals
+    (:func:`~arrayproc.track.multi.stitch.stitch_by_tonals`)."""
     from arrayproc.track.manage.delete import DeletionRule
     from arrayproc.track.manage.manager import TrackManager
     from arrayproc.track.manage.mirrored import mirrored_cone, mirrored_initial
@@ -195,7 +219,8 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         if not assoc.may_start(Z, j, t):
             return None
         xb, Pb, lw = mirrored_initial(Z[:, :3], j, float(Z[j, 4]), smin, sr)
-        x, P = filt.initial(xb, Pb, birth_tonals(Z, j, merge, K), float(ll["sigma_rate_hz_s"]))
+        f0 = birth_tonals(Z, j, K, float(ll["adopt_d2"]))
+        x, P = filt.initial(xb, Pb, f0, float(ll["sigma_rate_hz_s"]))
         return x, P, lw
 
     ts = np.array([t for t, _Z, _r in scans])
@@ -205,16 +230,19 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
         qmul = 1.0 + (np.degrees(rate) / float(b["turn_ref_deg_s"])) ** 2
     hw = cfg.get("hit_window")
     window = {} if hw is None else {"window": int(hw[1]), "min_hits": int(hw[0])}
-    gate_hz = 3.0 * float(ll["sigma_hz"])
+    distinct = TonalDistinct(filt, float(ll["same_source_deg"]), int(ll["same_source_scans"]))
     delete = DeletionRule(max_misses=cfg["max_misses"], **window, pos=(0, 1, 2, 3),
-                          merge_d2=float(b["merge_d2"]), distinct=tonals_distinct(K, gate_hz))
+                          merge_d2=float(b["merge_d2"]), distinct=distinct)
     mgr = TrackManager(filt, init, assoc,
                        confirm=cfg["confirm"], delete=delete)
     for k, (t, Z, _rows) in enumerate(scans):
         assoc.confirmed = np.array([tr.status is Status.CONFIRMED for tr in mgr.live], bool)
         mgr.step(t, Z, Context(np.zeros(4), t=float(t), q_scale=float(qmul[k])))
+        distinct.absorb(mgr.tracks)
     at = {t: (Z, r) for t, Z, r in scans}
-    for tr in mgr.tracks:
+    tracks = stitch_by_tonals(mgr.tracks, K, float(ll["reid_s"]), float(ll["reid_hz"]),
+                              float(ll["reid_deg"]))
+    for tr in tracks:
         h = tr.arrays()
         rows = np.full(h["meas"].size, -1, np.int64)
         fz = np.full(h["meas"].size, np.nan)
@@ -235,5 +263,5 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
                                   np.ascontiguousarray(h["P"][:, :4, :4]), h["logw"],
                                   np.degrees(hh))
         tr.meta["cone"], tr.meta["sigma_cone"], tr.meta["stbd_weight"] = c, sc, ws
-    return mgr.tracks
+    return tracks
 

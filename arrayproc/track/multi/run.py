@@ -26,7 +26,7 @@ from arrayproc.track.state import Context
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["multi_target", "run_multi", "confirmed_status"]
+__all__ = ["multi_target", "run_multi", "confirmed_status", "effective_config"]
 
 
 def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarray]:
@@ -84,8 +84,6 @@ def multi_target(products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any
     kind = cfg["measurements"]
     if kind == "bearings":
         return _bearings(prod, products_path, cfg, tma_cfg, nav)
-    if kind == "lines+bearings" and not _has_lines(prod):
-        return _bearings(prod, products_path, cfg, tma_cfg, nav)
     if kind in ("lines+bearings", "lines"):
         return _lines(prod, products_path, cfg, tma_cfg, nav)
     if kind == "contacts":
@@ -127,37 +125,52 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
     return [tr for tr in tracks if not tr.meta.get("skipped")], out
 
 
-def _has_lines(prod: dict) -> bool:
-    """Products that ``lines+bearings`` can use: a ``lines`` group beside cone-angle bearings.
-    Otherwise (no lines stage in the chain; relative-bearing beams, whose rows are resolved
-    to their side) a warning, and the bearings are tracked alone."""
+def effective_config(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]:
+    """The multi settings ``cfg`` for a products file: ``lines+bearings`` needs a ``lines``
+    group beside cone-angle bearings; otherwise (no lines stage in the chain; relative-bearing
+    beams, whose rows are resolved to their side) a warning, and the bearings alone."""
     import warnings
 
-    from arrayproc.io.schema import groups_of_kind as kinds
+    from arrayproc.io.products import read_products
 
-    has = bool(kinds(prod, "lines"))
-    sided = any("side" in prod[g] for g in kinds(prod, "bearings"))
+    if cfg["measurements"] != "lines+bearings":
+        return cfg
+    prod = read_products(products_path)
+    has = bool(groups_of_kind(prod, "lines"))
+    sided = any("side" in prod[g] for g in groups_of_kind(prod, "bearings"))
     if has and not sided:
-        return True
-    warnings.warn("tracker.measurements = 'lines+bearings': " + (
+        return cfg
+    warnings.warn(f"{products_path}: tracker.measurements = 'lines+bearings': " + (
         "the bearings are resolved to their side (relative-bearing beams)" if sided else
         "the products have no lines group (no lines stage in the chain)")
-        + "; tracking the bearings alone", stacklevel=3)
-    return False
+        + "; tracking the bearings alone", stacklevel=2)
+    return dict(cfg, measurements="bearings")
 
 
 def _lines(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict[str, Any],
            nav: Nav | None) -> Result:
     """Line contacts (and broadband bearings) → scans → tracks with tonal slots → one TMA per
     track, each point with its measurement (:func:`_measurement_columns`)."""
-    from arrayproc.track.multi.lines import line_scans, line_table, track_lines
+    from arrayproc.track.multi.lines import (
+        line_scans,
+        line_table,
+        row_sigma_deg,
+        snapshot_times,
+        track_lines,
+    )
 
     m = line_table(prod, products_path, cfg, tma_cfg)
-    scans = line_scans(m, cfg)
+    scans = line_scans(m, cfg, snapshot_times(prod))
     tracks = track_lines(scans, cfg, nav, _sound_speed(products_path))
+    sig = row_sigma_deg(m, cfg) / np.maximum(np.sin(np.deg2rad(m["cone_deg"])),
+                                             float(cfg["bearing"]["min_sigma_sin"]))
     out, kept = [], []
     for tr in tracks:
-        rows = tma_track(tr, m, nav, tma_cfg, by_side=True)
+        r = tr.meta["rows"][tr.meta["rows"] >= 0]
+        # the TMA's bearing σ: the filter's, or the RMS cone σ of the track's rows if larger
+        s_rows = float(np.sqrt(np.mean(sig[r] ** 2))) if r.size else 0.0
+        cfg_tr = dict(tma_cfg, sigma_bearing_deg=max(float(tma_cfg["sigma_bearing_deg"]), s_rows))
+        rows = tma_track(tr, m, nav, cfg_tr, by_side=True)
         if rows is None:
             continue
         out.append(_measurement_columns(tr, m, rows))
@@ -293,6 +306,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     elif cfg["measurements"] != "positions":
         raise FormatError(f"{products_path}: no root attribute 'source' naming the recording; "
                           "set tracker.nav")
+    cfg = effective_config(products_path, cfg)
     tracks, rows = multi_target(products_path, cfg, tma_cfg, nav)
     if progress:
         n_conf = sum(tr.confirmed_at is not None for tr in tracks)

@@ -62,7 +62,7 @@ from arrayproc.track.manage.bank import StackedBank
 from arrayproc.track.manage.tracks import Track
 from arrayproc.track.models.bearing_frequency import BearingFrequency
 
-__all__ = ["TonalBank", "TonalGNN", "tonal_slots", "tonals_distinct", "birth_tonals",
+__all__ = ["TonalBank", "TonalGNN", "tonal_slots", "TonalDistinct", "birth_tonals",
            "tonal_bearing_bank", "line_sigma_deg", "NO_FREQ_VAR"]
 
 #: S_f of a pair without frequency information: ln det(2π S_f) = 0, the bearing likelihood
@@ -316,17 +316,86 @@ class TonalBank:
         return True
 
 
-def tonals_distinct(n_tonals: int, gate_hz: float) -> Callable[[Track, Track], bool]:
-    """The duplicate rule's ``distinct`` test of tonal tracks: both tracks hold tonals and no
-    tonal of one lies within ``gate_hz`` of one of the other (two sources at one bearing)."""
-    def distinct(a: Track, b: Track) -> bool:
-        fa, _ = tonal_slots(a.x, n_tonals)
-        fb, _ = tonal_slots(b.x, n_tonals)
-        fa, fb = fa[np.isfinite(fa)], fb[np.isfinite(fb)]
-        if fa.size == 0 or fb.size == 0:
+class TonalDistinct:
+    """The duplicate rule's ``distinct`` test of tonal tracks
+    (:class:`~arrayproc.track.manage.delete.DeletionRule`), and the transfer of tonals when
+    two tracks of one source merge.
+
+    Two confirmed tracks whose tonals are all farther apart than the 1-dof χ² gate
+    (d² = Δf² / (P_a + P_b + 2σ_f²)), or of which one holds tonals and the other none, are
+    two sources at one bearing (a crossing) — unless both their mirror bearings stay within
+    ``together_deg`` of each other for ``together_scans`` consecutive scans: one source whose
+    tonals (or broadband peak and tonals) started two tracks, which the duplicate test then
+    merges. Tracks sharing a tonal, or both without any, are left to the duplicate test.
+    :meth:`absorb` gives the surviving track of a merged pair the other's tonals.
+
+    Parameters
+    ----------
+    filt : TonalBank
+        The tracks' filter (slot layout, σ_f).
+    together_deg : float
+        Bearing difference (deg) under which two tracks are together.
+    together_scans : int
+        Consecutive scans together after which tracks with disjoint tonals are one source.
+    """
+
+    def __init__(self, filt: TonalBank, together_deg: float, together_scans: int) -> None:
+        self.filt = filt
+        self.together_deg = float(together_deg)
+        self.together_scans = int(together_scans)
+        self.counts: dict[tuple[int, int], int] = {}
+
+    def disjoint(self, xa: np.ndarray, Pa: np.ndarray, xb: np.ndarray, Pb: np.ndarray) -> bool:
+        """Both states hold tonals and none of one matches one of the other."""
+        K = self.filt.K
+        fa, _ = tonal_slots(xa, K)
+        fb, _ = tonal_slots(xb, K)
+        ia, ib = np.flatnonzero(np.isfinite(fa)), np.flatnonzero(np.isfinite(fb))
+        if ia.size == 0 or ib.size == 0:
             return False
-        return bool(np.abs(fa[:, None] - fb[None, :]).min() > gate_hz)
-    return distinct
+        va = np.array([Pa[self.filt._fi(k), self.filt._fi(k)] for k in ia])
+        vb = np.array([Pb[self.filt._fi(k), self.filt._fi(k)] for k in ib])
+        d2 = (fa[ia][:, None] - fb[ib][None, :]) ** 2 / (
+            va[:, None] + vb[None, :] + 2 * self.filt.sigma_hz ** 2)
+        return bool(d2.min() > self.filt.gate1)
+
+    def __call__(self, a: Track, b: Track) -> bool:
+        key = (min(a.id, b.id), max(a.id, b.id))
+        d = (np.asarray(a.x[:2]) - np.asarray(b.x[:2]) + 180.0) % 360.0 - 180.0
+        n = self.counts.get(key, 0) + 1 if np.all(np.abs(d) <= self.together_deg) else 0
+        self.counts[key] = n
+        return not self.shared(a.x, a.P, b.x, b.P) and n < self.together_scans
+
+    def shared(self, xa: np.ndarray, Pa: np.ndarray, xb: np.ndarray, Pb: np.ndarray) -> bool:
+        """Both states hold a tonal of the other (or neither holds any: two broadband tracks,
+        the bearing test alone)."""
+        fa, _ = tonal_slots(xa, self.filt.K)
+        fb, _ = tonal_slots(xb, self.filt.K)
+        na, nb = np.isfinite(fa).any(), np.isfinite(fb).any()
+        if not (na or nb):
+            return True
+        return bool(na and nb and not self.disjoint(xa, Pa, xb, Pb))
+
+    def absorb(self, tracks: list[Track]) -> None:
+        """After a scan: each track deleted while together with a live one (3 scans or
+        more) hands it the tonals it does not hold."""
+        by_id = {tr.id: tr for tr in tracks}
+        for (i, j), n in list(self.counts.items()):
+            a, b = by_id.get(i), by_id.get(j)
+            if a is None or b is None or a.alive == b.alive:
+                if a is None or b is None or not (a.alive or b.alive):
+                    del self.counts[(i, j)]
+                continue
+            gone, keep = (a, b) if b.alive else (b, a)
+            del self.counts[(i, j)]
+            if n < 3:
+                continue
+            fg, _ = tonal_slots(gone.x, self.filt.K)
+            for f in fg[np.isfinite(fg)]:
+                fk, _ = tonal_slots(keep.x, self.filt.K)
+                held = fk[np.isfinite(fk)]
+                if held.size == 0 or np.abs(held - f).min() > 3.0 * self.filt.sigma_hz:
+                    self.filt.adopt(keep.x, keep.P, float(f))
 
 
 @dataclasses.dataclass
@@ -362,7 +431,7 @@ class TonalGNN:
     several lines feed one track instead of starting one each. Of the measurements left for
     the initiator, those of one scan within ``merge_deg`` of each other in cone angle (a
     source's broadband peak and its lines) start one track: the first line among them (the
-    initiator takes the others' frequencies as its tonals, :func:`birth_tonals`), or the
+    initiator takes as its tonals those of the others near it, :func:`birth_tonals`), or the
     broadband row when none is a line.
 
     Parameters
@@ -476,12 +545,12 @@ class TonalGNN:
         return bool(last[2][j])
 
 
-def birth_tonals(Z: np.ndarray, j: int, merge_deg: float, n_tonals: int) -> np.ndarray:
+def birth_tonals(Z: np.ndarray, j: int, n_tonals: int, adopt_d2: float = 1.0) -> np.ndarray:
     """Frequencies (Hz) a track born from measurement j of scan Z (m, 5) starts with: its own
-    and those of the scan's other lines within ``merge_deg`` of it in cone angle (the cluster
-    of :class:`TonalGNN`), distinct, at most ``n_tonals``."""
-    near = np.abs(Z[:, 0] - Z[j, 0]) <= merge_deg
-    f = Z[near, 3]
+    and those of the scan's other lines whose cone angle is within d² ≤ ``adopt_d2`` of it
+    (Δθ² / (σ_j² + σ_k²), the rows' broadside σ), distinct, at most ``n_tonals``."""
+    d2 = (Z[:, 0] - Z[j, 0]) ** 2 / (Z[:, 4] ** 2 + Z[j, 4] ** 2)
+    f = Z[d2 <= adopt_d2, 3]
     f = f[np.isfinite(f)]
     own = Z[j, 3]
     out = [own] if np.isfinite(own) else []

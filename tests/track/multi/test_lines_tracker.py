@@ -183,3 +183,84 @@ def test_same_seed_same_tracks():
         ha, hb = ta.arrays(), tb.arrays()
         assert np.array_equal(ha["meas"], hb["meas"])
         assert np.array_equal(ha["x"], hb["x"], equal_nan=True)
+
+
+def test_products_without_lines_are_tracked_as_bearings(tmp_path):
+    """The shipped tracker (lines+bearings) on products without a lines group: a warning, and
+    the tracks of ``measurements = "bearings"`` bit for bit."""
+    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.track.runner import run_tracker
+    from tests.track.test_runner import _write_inputs
+
+    rec, full, _ = _write_inputs(tmp_path)
+    g = read_products(str(full))["bearings"]
+    keep = np.asarray(g["time"]) < 400.0                   # a short run: the first 400 s
+    prod = tmp_path / "short.h5"
+    with ProductsWriter(prod, source=str(rec)) as w:
+        w.group("bearings", "bearings").append(**{k: np.asarray(g[k])[keep] for k in g
+                                                  if k not in ("kind", "stage", "attrs")})
+    shipped = os.path.join(DATA, "multi_target.toml")
+    text = open(shipped, encoding="utf-8").read()
+    assert 'measurements = "lines+bearings"' in text
+    only = tmp_path / "bearings.toml"
+    only.write_text(text.replace('measurements = "lines+bearings"', 'measurements = "bearings"'))
+    with pytest.warns(UserWarning, match="no lines group"):
+        run_tracker(str(prod), shipped, str(tmp_path / "a.h5"))
+    run_tracker(str(prod), str(only), str(tmp_path / "b.h5"))
+    a, b = read_products(str(tmp_path / "a.h5"))["tracks"], \
+        read_products(str(tmp_path / "b.h5"))["tracks"]
+    assert a["time"].size > 0 and set(a) == set(b)
+    for k in ("time", "track_id", "x", "y", "cov", "status", "row"):
+        assert np.array_equal(np.asarray(a[k]), np.asarray(b[k]), equal_nan=True), k
+
+
+def _drop(m, label, keep):
+    return {k: v[keep] for k, v in m.items()}, label[keep]
+
+
+def _track_table(m, label, duration):
+    """Track a table whose rows were thinned; every 2 s snapshot is a scan, rows or none."""
+    cfg = _cfg()
+    m = dict(m, row=np.arange(m["time"].size))
+    scans = line_scans(m, cfg, np.arange(0.0, duration, 2.0))
+    return track_lines(scans, cfg, _nav(duration)), m
+
+
+@pytest.mark.parametrize("same_tonal", [True, False])
+def test_a_source_whose_lines_fade_keeps_its_track(same_tonal):
+    """Lines only, gone for 60 s (longer than a track coasts): the track that resumes with the
+    same tonal is the same track (stitched by its tonal); with another tonal it is another."""
+    src = [(2500.0, 2500.0, -2.0, 1.0, [210.0])]
+    times = np.arange(0.0, 400.0, 2.0)
+    m, label = _table(src, times, seed=8, broadband=False)
+    m, label = _drop(m, label, (m["time"] < 150.0) | (m["time"] >= 210.0))
+    if not same_tonal:
+        m["freq_hz"] = np.where(m["time"] >= 210.0, m["freq_hz"] + 40.0, m["freq_hz"])
+    tracks, m = _track_table(m, label, 400.0)
+    conf = [tr for tr in _confirmed(tracks) if (tr.meta["rows"] >= 0).sum() > 30]
+    spans = sorted((m["time"][tr.meta["rows"][tr.meta["rows"] >= 0]].min(),
+                    m["time"][tr.meta["rows"][tr.meta["rows"] >= 0]].max()) for tr in conf)
+    if same_tonal:
+        assert len(conf) == 1 and spans[0][0] < 20.0 and spans[0][1] > 380.0, spans
+    else:
+        assert len(conf) == 2 and spans[0][1] < 150.0 and spans[1][0] >= 210.0, spans
+
+
+def test_a_tonal_source_crossing_a_broadband_one_stays_two_tracks():
+    """One source seen only in the broadband, one only by its line, crossing in bearing: a
+    track with tonals and one without are not duplicates while they cross."""
+    times = np.arange(0.0, 600.0, 2.0)
+    a, la = _table([CROSSING[0]], times, seed=12)
+    b, lb = _table([CROSSING[1]], times, seed=13)
+    a, la = _drop(a, la, a["kind"] == KIND_BEARINGS)                 # broadband only
+    b, lb = _drop(b, lb + 1, b["kind"] == KIND_LINES)                 # its line only
+    m = {k: np.concatenate([a[k], b[k]]) for k in a}
+    label = np.concatenate([la, lb])
+    tracks, m = _track_table(m, label, 600.0)
+    long = [tr for tr in _confirmed(tracks) if (tr.meta["rows"] >= 0).sum() > 100]
+    assert len(long) == 2
+    for tr in long:
+        r = tr.meta["rows"][tr.meta["rows"] >= 0]
+        src = label[r]
+        assert np.mean(src == np.bincount(src).argmax()) >= 0.95
+        assert m["time"][r].min() < 250.0 and m["time"][r].max() > 450.0
