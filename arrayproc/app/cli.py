@@ -28,7 +28,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from arrayproc.errors import ArrayprocError, Interrupted
+from arrayproc.errors import EXIT_MEMORY, EXIT_WRITE, ArrayprocError, Interrupted
 
 #: Modules that add sub-commands: each defines ``add_parser(sub)``. A new command module
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
@@ -40,6 +40,18 @@ STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
                      if hasattr(signal, n))
 
 EX_SOFTWARE = 70  # sysexits.h: internal software error
+
+#: The exit statuses, as ``arrayproc --help`` lists them (docs/reliability.md).
+EXIT_STATUSES = f"""exit status:
+  0    done
+  1    batch: some inputs failed (the summary names them; --resume runs them again)
+  2    bad input, configuration or argument, or a damaged input file (one line names it)
+  {EX_SOFTWARE}   internal error (a bug; ARRAYPROC_DEBUG=1 shows the traceback)
+  {EXIT_WRITE}   an output could not be written: disk full, quota, I/O error, read-only
+       file system (nothing was left behind)
+  {EXIT_MEMORY}   the run reached its memory limit (--max-memory, ARRAYPROC_MAX_MEMORY or
+       the process's limit); the line names the stage
+  128+N  stopped by signal N: 130 SIGINT, 143 SIGTERM, 129 SIGHUP (no output written)"""
 
 
 def warn(msg: str) -> None:
@@ -76,7 +88,8 @@ class _Version(argparse.Action):
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``arrayproc`` parser with the sub-commands of every :data:`COMMAND_MODULES`."""
-    p = _Parser(prog="arrayproc", description=__doc__.splitlines()[0])
+    p = _Parser(prog="arrayproc", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action=_Version)
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -206,7 +219,7 @@ def _run(args: argparse.Namespace) -> int:
         return int(args.func(args) or 0)
     except ArrayprocError as e:
         print(f"arrayproc: error: {' '.join(str(e).split())}", file=sys.stderr)
-        return 2
+        return int(getattr(e, "exit_status", 2))
     except Interrupted as e:
         print(f"arrayproc: error: {e}; no output written", file=sys.stderr)
         return 128 + e.signum
@@ -218,13 +231,15 @@ def _run(args: argparse.Namespace) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 1
     except MemoryError:
-        print("arrayproc: error: out of memory (try a smaller block size or fewer beams)",
-              file=sys.stderr)
-        return 2
+        from arrayproc.app.resources import memory_error
+        e = memory_error()
+        print(f"arrayproc: error: {e}", file=sys.stderr)
+        return e.exit_status
     except OSError as e:  # the environment: disk full, permissions, I/O errors
+        from arrayproc.io.atomic import WRITE_ERRNOS
         where = f"{e.filename}: " if e.filename else ""
         print(f"arrayproc: error: {where}{e.strerror or e}", file=sys.stderr)
-        return 2
+        return EXIT_WRITE if e.errno in WRITE_ERRNOS else 2
     except Exception as e:
         stop = _stop_cause(e)
         if stop is not None:  # a signal raised where Python wraps it (e.g. in __set_name__)

@@ -187,3 +187,42 @@ def check_chain_memory(chain_path: str, config: Mapping[str, Any], n_channels: i
                           f"{n_channels} channels); reduce beams, nfft or batch, or raise "
                           "--max-memory")
     return total
+
+
+# -- the memory guard at run time ---------------------------------------------------------------
+_WHERE: list[str] = []  # the stages and trackers running now, innermost last
+
+
+class running:  # noqa: N801 - used as a context manager, like contextlib's
+    """Mark the stage or tracker ``name`` as running (a context manager): a memory error or
+    the memory watchdog's stop inside names it (:func:`memory_error`)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = str(name)
+
+    def __enter__(self) -> running:
+        _WHERE.append(self.name)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if _WHERE and _WHERE[-1] == self.name:
+            _WHERE.pop()
+        elif self.name in _WHERE:
+            _WHERE.remove(self.name)
+
+
+def current_stage() -> str | None:
+    """The innermost stage or tracker running now, else None."""
+    return _WHERE[-1] if _WHERE else None
+
+
+def memory_error(limit: float | None = None, used: float | None = None) -> Any:
+    """The :class:`~arrayproc.errors.MemoryLimitError` of a run out of memory, naming the
+    stage or tracker that was running."""
+    from arrayproc.errors import MemoryLimitError
+    where = current_stage()
+    what = f"in {where}" if where else "before any stage ran"
+    size = f" ({_size(used)} in use, limit {_size(limit)})" if used and limit else ""
+    return MemoryLimitError(f"out of memory {what}{size}; stopped cleanly, nothing was "
+                            "written (use a smaller block, fewer beams or channels, or give "
+                            "more memory with --max-memory)")
