@@ -566,6 +566,11 @@ def atomic_path(output: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
         os.close(fd)
 
 
+#: Lowest HDF5 format version of the files the writers create (``h5py.File(libver=...)``):
+#: 1.8's, with checksummed superblock and object headers (any HDF5 since 2008 reads it).
+LIBVER = "v108"
+
+
 class AtomicH5Writer:
     """An HDF5 file written under a temporary name beside ``path``: :meth:`close` moves it into
     place, :meth:`abort` (or an exception inside a ``with`` block) removes it.
@@ -596,7 +601,9 @@ class AtomicH5Writer:
                 self._f = h5py.File(self._tmp, "w", libver="latest")
             else:
                 self._fh = GuardedFile(self._tmp, str(self.path))
-                self._f = h5py.File(self._fh, "w")
+                # HDF5 1.8's format: superblock and object headers carry checksums, so a
+                # damaged file is refused by name instead of read wrong
+                self._f = h5py.File(self._fh, "w", libver=LIBVER)
         except OSError as e:
             self._drop()
             if e.errno in WRITE_ERRNOS:

@@ -59,7 +59,7 @@ class RecordingWriter(AtomicH5Writer):
             chunk_samples = max(256, (1 << 20) // (np.dtype(dtype).itemsize * n_channels))
         self._td = self._f.create_dataset(
             "time_data", shape=(0, n_channels), maxshape=(None, n_channels), dtype=dtype,
-            chunks=(int(chunk_samples), n_channels))
+            chunks=(int(chunk_samples), n_channels), fletcher32=True)  # damage found on read
         self._td.attrs["sample_freq"] = float(fs)
         self._td.attrs["units"] = units
         if positions is not None:
@@ -73,6 +73,7 @@ class RecordingWriter(AtomicH5Writer):
         self._td.resize(self.n_samples + n, axis=0)
         self._td[self.n_samples:self.n_samples + n] = data
         self.n_samples += n
+        self.check()  # a failed write stops here (disk full, I/O error)
 
     def set_nav(self, time: np.ndarray, position: np.ndarray, heading: np.ndarray,
                 depth: np.ndarray | None = None) -> None:
