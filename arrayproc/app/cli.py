@@ -212,11 +212,22 @@ def _stop_cause(e: BaseException) -> Interrupted | None:
     return None
 
 
+def _max_memory(args: argparse.Namespace) -> float | None:
+    """The ``--max-memory`` of a command that has it, in bytes."""
+    text = getattr(args, "max_memory", None)
+    if text is None:
+        return None
+    from arrayproc.chain.guard import parse_bytes
+    return parse_bytes(text)
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         from arrayproc.app.catalogue import resolve_names
         resolve_names(args)  # -c NAME: a shipped chain, tracker, TMA or scenario by name
-        return int(args.func(args) or 0)
+        from arrayproc.chain.guard import MemoryWatch, run_limit
+        with MemoryWatch(run_limit(_max_memory(args))):  # every stage and tracker
+            return int(args.func(args) or 0)
     except ArrayprocError as e:
         print(f"arrayproc: error: {' '.join(str(e).split())}", file=sys.stderr)
         return int(getattr(e, "exit_status", 2))
@@ -231,7 +242,7 @@ def _run(args: argparse.Namespace) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 1
     except MemoryError:
-        from arrayproc.app.resources import memory_error
+        from arrayproc.chain.guard import memory_error
         e = memory_error()
         print(f"arrayproc: error: {e}", file=sys.stderr)
         return e.exit_status

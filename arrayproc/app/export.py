@@ -32,18 +32,13 @@ def export(files: Sequence[str], to: str, output: str,
         Selections (raven) or lines (rep) written.
     """
     from arrayproc.io import exports
-    from arrayproc.io.atomic import commit, discard, temporary_sibling
+    from arrayproc.io.atomic import atomic_path
     if to not in ("raven", "rep"):
         raise ConfigError(f"export: --to must be raven or rep, not {to!r}")
     if to == "rep" and len(files) != 1:
         raise ConfigError("export: --to rep takes one file")
     check_output(output, list(files))
-    tmp = temporary_sibling(output)
-    try:
+    with atomic_path(output) as tmp:
         n = (exports.write_raven(list(files), str(tmp)) if to == "raven"
              else exports.write_rep(files[0], str(tmp), origin=origin))
-        commit(tmp, output)
-    except BaseException:
-        discard(tmp)
-        raise
     return n

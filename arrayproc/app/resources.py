@@ -11,6 +11,9 @@ use them), per stage:
   stage's band (all ``nfft/2 + 1`` without one);
 * any other stage: two copies of its input block.
 
+At run time, :mod:`arrayproc.chain.guard` covers every stage and tracker: a run whose
+resident memory nears the limit stops cleanly, naming the stage.
+
 It is an order-of-magnitude guard (the default limit is half the machine's RAM), not an
 accounting: what it must catch are parameters such as 10⁸ beams that would exhaust the machine
 before reading any data.
@@ -20,38 +23,14 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from collections.abc import Mapping
 from typing import Any
 
+from arrayproc.chain.guard import parse_bytes
 from arrayproc.errors import ConfigError
 
-_UNITS = {"": 1, "b": 1, "k": 1 << 10, "kb": 1 << 10, "kib": 1 << 10, "m": 1 << 20,
-          "mb": 1 << 20, "mib": 1 << 20, "g": 1 << 30, "gb": 1 << 30, "gib": 1 << 30,
-          "t": 1 << 40, "tb": 1 << 40, "tib": 1 << 40}
-
-
-def parse_bytes(text: str) -> float:
-    """A size such as ``500M``, ``4G``, ``1.5GiB`` or ``1000000`` in bytes.
-
-    Parameters
-    ----------
-    text : str
-        Number with an optional unit (k, M, G, T; powers of 1024).
-
-    Returns
-    -------
-    float
-        Bytes (> 0).
-    """
-    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-z]*)\s*", str(text))
-    if not m or m.group(2).lower() not in _UNITS:
-        raise ConfigError(f"--max-memory: expected a size such as 500M or 4G, got {text!r}")
-    v = float(m.group(1)) * _UNITS[m.group(2).lower()]
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"--max-memory: must be a finite size > 0, got {text!r}")
-    return v
-
+__all__ = ["check_chain_memory", "default_limit", "estimate_chain_bytes", "machine_memory",
+           "parse_bytes"]
 
 def machine_memory() -> float:
     """Physical memory of the machine, bytes (0 when unknown)."""
@@ -187,42 +166,3 @@ def check_chain_memory(chain_path: str, config: Mapping[str, Any], n_channels: i
                           f"{n_channels} channels); reduce beams, nfft or batch, or raise "
                           "--max-memory")
     return total
-
-
-# -- the memory guard at run time ---------------------------------------------------------------
-_WHERE: list[str] = []  # the stages and trackers running now, innermost last
-
-
-class running:  # noqa: N801 - used as a context manager, like contextlib's
-    """Mark the stage or tracker ``name`` as running (a context manager): a memory error or
-    the memory watchdog's stop inside names it (:func:`memory_error`)."""
-
-    def __init__(self, name: str) -> None:
-        self.name = str(name)
-
-    def __enter__(self) -> running:
-        _WHERE.append(self.name)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if _WHERE and _WHERE[-1] == self.name:
-            _WHERE.pop()
-        elif self.name in _WHERE:
-            _WHERE.remove(self.name)
-
-
-def current_stage() -> str | None:
-    """The innermost stage or tracker running now, else None."""
-    return _WHERE[-1] if _WHERE else None
-
-
-def memory_error(limit: float | None = None, used: float | None = None) -> Any:
-    """The :class:`~arrayproc.errors.MemoryLimitError` of a run out of memory, naming the
-    stage or tracker that was running."""
-    from arrayproc.errors import MemoryLimitError
-    where = current_stage()
-    what = f"in {where}" if where else "before any stage ran"
-    size = f" ({_size(used)} in use, limit {_size(limit)})" if used and limit else ""
-    return MemoryLimitError(f"out of memory {what}{size}; stopped cleanly, nothing was "
-                            "written (use a smaller block, fewer beams or channels, or give "
-                            "more memory with --max-memory)")

@@ -333,11 +333,23 @@ def read_products(path: str | os.PathLike) -> ProductsFile:
                                  "attrs": dict(g.attrs)}
             for k, v in g.items():
                 if isinstance(v, h5py.Dataset):
-                    d[k] = v[()]
+                    d[k] = _read_dataset(v, path, f"{name}/{k}")
             check_group(name, d, str(path))
             _fill_empty_group(d)
             out[name] = ProductGroup(name, d)
         return out
+
+
+def _read_dataset(v: h5py.Dataset, path: Any, where: str) -> Any:
+    """A dataset's values; a damaged chunk (failed checksum or decompression) is a
+    FormatError naming the file, the dataset and the first row that cannot be read."""
+    try:
+        return v[()]
+    except (OSError, ValueError, RuntimeError) as e:
+        from arrayproc.io.h5 import damage_reason, first_bad_row
+        row, text = first_bad_row(v, 0, v.shape[0]) if v.ndim and v.chunks else (0, "")
+        raise FormatError(f"{path}: /{where} is damaged from row {row}: "
+                          f"{damage_reason(text or str(e))}") from None
 
 
 def _fill_empty_group(d: dict[str, Any]) -> None:

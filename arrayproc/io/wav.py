@@ -223,8 +223,8 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                           f"{n_ch} channels")
     with RecordingWriter(out, ref.fs, n_ch, positions=positions, sound_speed=sound_speed,
                          start_time=start_time, units="Pa" if scale else "FS",
-                         attrs={"imported_from": ", ".join(str(i.path.name) for i in infos)}
-                         ) as w:
+                         attrs={"imported_from": ", ".join(str(i.path.name) for i in infos)},
+                         expected_samples=n) as w:
         for s in range(0, n, chunk):
             c = min(chunk, n - s)
             block = np.concatenate([read_wav_frames(i, s, c) for i in infos], axis=1)
