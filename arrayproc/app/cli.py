@@ -18,6 +18,11 @@ Outputs are written to a temporary file and renamed, so a failed run leaves noth
 
 from __future__ import annotations
 
+from arrayproc.app import early as _early
+
+if _early.as_command():  # the `arrayproc` script: stop signals recorded from here on
+    _early.install()
+
 import argparse
 import importlib
 import os
@@ -273,12 +278,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     from arrayproc.io.atomic import clear_stop, discard_all
     clear_stop()
     old = _install_handlers()
+    early = list(_early.EARLY)
+    _early.EARLY.clear()
     old_show = warnings.showwarning
     warnings.showwarning = _show_warning
     old_unraisable = sys.unraisablehook
     sys.unraisablehook = _quiet_unraisable(old_unraisable)
     try:
         try:
+            if early:  # a signal during start-up, before the handlers: the same stop
+                raise Interrupted(early[0])
             args = build_parser().parse_args(argv)
             args.started = started
             ensure_numba_cache()
