@@ -1,0 +1,230 @@
+"""The fault table through the real command line (a subprocess per case): faults of the
+environment (disk full on a tmpfs, injected write failures, a read-only file system, the
+memory limit) and damaged inputs (truncations, bit flips in the superblock and in chunk
+data, a dataset shorter than it declares, files open by a writer), then SIGKILL at seeded
+random times in ``process``, ``simulate`` and ``batch``.
+
+Every case: the exit status documented for its class (never one from a signal), exactly
+one ``arrayproc: error:`` line on stderr with the case's key text, no traceback, nothing
+new left behind (no output, no ``.part``), every input byte-identical. The default run takes
+the cases marked ``default`` and one kill per command; ``-m slow`` runs the whole table and
+five kills per command.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from tests.faults.cases import CASES, can_mount, kill_writers, make_fault_base, unmount_all
+
+REPO = Path(__file__).resolve().parents[2]
+MOUNTING = can_mount()
+NEEDS_MOUNT = ("disk full (tmpfs)", "read-only file system")
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("faultbase")
+    make_fault_base(d)
+    return d
+
+
+def snapshot(d: Path) -> dict[str, tuple]:
+    """Every entry below d: (kind, content hash or link target)."""
+    out = {}
+    for root, dirs, files in os.walk(d):
+        for name in dirs + files:
+            p = Path(root) / name
+            st = os.lstat(p)
+            if stat.S_ISLNK(st.st_mode):
+                out[str(p)] = ("link", os.readlink(p))
+            elif stat.S_ISREG(st.st_mode):
+                out[str(p)] = ("file", hashlib.sha256(p.read_bytes()).hexdigest())
+            else:
+                out[str(p)] = ("other", stat.S_IFMT(st.st_mode))
+    return out
+
+
+def command(args: list[str], env: dict[str, str] | None = None, rlimit_as: int | None = None,
+            **kw) -> subprocess.Popen:
+    """``python -m arrayproc ARGS`` with this worktree's package."""
+    e = dict(os.environ, PYTHONPATH=str(REPO), **(env or {}))
+    e.pop("ARRAYPROC_DEBUG", None)
+
+    def limit() -> None:
+        if rlimit_as is not None:
+            import resource
+            resource.setrlimit(resource.RLIMIT_AS, (rlimit_as, rlimit_as))
+    return subprocess.Popen([sys.executable, "-m", "arrayproc", *args], env=e,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=limit if rlimit_as else None, **kw)
+
+
+def problems_of(rc: int, err: str, status: int, match: str) -> list[str]:
+    lines = err.strip().splitlines()
+    found = []
+    if rc < 0:
+        found.append(f"killed by signal {-rc}")
+    elif rc != status:
+        found.append(f"exit {rc}, expected {status}")
+    if "Traceback" in err or "Segmentation" in err:
+        found.append("traceback")
+    if len(lines) != 1 or not lines[0].startswith("arrayproc: error:"):
+        found.append(f"stderr {lines!r}")
+    elif match.lower() not in lines[0].lower():
+        found.append(f"message lacks {match!r}")
+    return found
+
+
+def run_case(c, base: Path, tmp_path: Path) -> tuple[list[str], str]:
+    d = tmp_path / "w"
+    shutil.copytree(base, d)
+    try:
+        args = c.setup(d)
+        before = snapshot(d)
+        p = command(args, c.env, c.rlimit_as, cwd=d)
+        try:
+            _, err = p.communicate(timeout=300)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        kill_writers()
+        problems = problems_of(p.returncode, err, c.status, c.match)
+        after = snapshot(d)
+    finally:
+        kill_writers()
+        unmount_all()
+    if after != before:
+        new = sorted(set(after) - set(before))
+        changed = sorted(k for k in before if after.get(k) != before[k])
+        problems.append(f"files new {new} changed {changed}")
+    line = err.strip().splitlines()[0] if err.strip() else ""
+    return problems, line
+
+
+def _params(full: bool):
+    return [pytest.param(c, id=c.id, marks=() if c.default or full else pytest.mark.slow)
+            for c in CASES]
+
+
+@pytest.mark.parametrize("c", _params(False))
+def test_fault_case(c, base, tmp_path):
+    if c.cls in NEEDS_MOUNT and not MOUNTING:
+        pytest.skip("mounting a tmpfs is not allowed here (the injected cases cover ENOSPC)")
+    problems, line = run_case(c, base, tmp_path)
+    assert not problems, f"{c.cls}/{c.id}: {'; '.join(problems)} [{line}]"
+
+
+# -- SIGKILL at random times ------------------------------------------------------------------
+def _handlers_installed(pid: int) -> bool:
+    try:
+        text = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    caught = int(next(x.split()[1] for x in text.splitlines() if x.startswith("SigCgt:")), 16)
+    return bool(caught >> (signal.SIGTERM - 1) & 1)
+
+
+def _kill_args(d: Path, what: str) -> list[str]:
+    if what == "process":
+        return ["process", str(d / "long.h5"), "-c", str(d / "big.toml"), "-o",
+                str(d / "out.h5"), "--no-progress", "-q"]
+    if what == "simulate":
+        return ["simulate", str(d / "scenario.toml"), "-o", str(d / "out.h5"), "--no-progress",
+                "-q"]
+    recs = [str(d / f"r{i}.h5") for i in range(3)]
+    return ["batch", *recs, "-c", str(d / "big.toml"), "-o", str(d / "out"), "--workers", "1",
+            "--no-progress", "-q"]
+
+
+def _complete(p: Path, what: str) -> bool:
+    try:
+        with h5py.File(p, "r") as f:
+            return bool(f.attrs.get("complete", False)) if what != "simulate" else \
+                "time_data" in f and "truth" in f
+    except OSError:
+        return False
+
+
+def kill_trial(base: Path, work: Path, what: str, delay: float) -> list[str]:
+    """SIGKILL ``what`` ``delay`` s after its handlers are installed (its whole process group:
+    the machine dying), then run it again (``batch --resume``): at most a ``.part`` after the
+    kill, none after the second run, complete outputs, inputs unchanged."""
+    shutil.copytree(base, work)
+    if what == "batch":
+        for i in range(3):
+            shutil.copy(work / "long.h5", work / f"r{i}.h5")
+    args = _kill_args(work, what)
+    before = snapshot(work)
+    p = command(args, cwd=work, start_new_session=True)
+    t0 = time.monotonic()
+    while not _handlers_installed(p.pid) and p.poll() is None and time.monotonic() - t0 < 60:
+        time.sleep(0.002)
+    time.sleep(delay)
+    try:
+        os.killpg(p.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    p.communicate()
+    problems = []
+    outs = [work / "out.h5"] if what != "batch" else [work / "out" / f"r{i}.h5"
+                                                       for i in range(3)]
+    left = set(snapshot(work)) - set(before)
+    for k in sorted(left):
+        name = Path(k).name
+        if Path(k) in outs:
+            if not _complete(Path(k), what):
+                problems.append(f"after the kill {name} exists but is not complete")
+        elif not (name.startswith(".") and ".part" in name) and Path(k) != work / "out":
+            problems.append(f"after the kill: {name} left")
+    again = command(args + (["--resume"] if what == "batch" else []), cwd=work)
+    _, err = again.communicate(timeout=300)
+    if again.returncode != 0:
+        problems.append(f"second run exit {again.returncode}: {err.strip()[-300:]}")
+    after = snapshot(work)
+    parts = [k for k in after if ".part" in Path(k).name]
+    if parts:
+        problems.append(f".part left after the second run: {parts}")
+    for o in outs:
+        if not _complete(o, what):
+            problems.append(f"{o.name} not complete after the second run")
+    changed = [k for k in before if after.get(k) != before[k]]
+    if changed:
+        problems.append(f"inputs changed: {changed}")
+    return problems
+
+
+KILLS = {"process": 2.5, "simulate": 2.0, "batch": 12.0}  # delays drawn in [0, this) s
+
+
+@pytest.mark.parametrize("what", ["process", "simulate"])
+def test_sigkill_then_rerun(what, base, tmp_path):
+    delay = float(np.random.default_rng(sum(map(ord, what))).uniform(0, KILLS[what]))
+    problems = kill_trial(base, tmp_path / "w", what, delay)
+    assert not problems, f"{what} killed at {delay:.2f} s: {problems}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("what", ["process", "simulate", "batch"])
+def test_sigkill_many(what, base, tmp_path):
+    rng = np.random.default_rng(2026 + len(what))
+    bad = []
+    for k in range(5):
+        delay = float(rng.uniform(0, KILLS[what]))
+        problems = kill_trial(base, tmp_path / f"w{k}", what, delay)
+        if problems:
+            bad.append(f"{delay:.2f} s: {problems}")
+    assert not bad, f"{what}: {bad}"
