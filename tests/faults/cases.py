@@ -162,12 +162,12 @@ def _full(cmd: Callable[..., list[str]], free: int) -> Callable[[Path], list[str
 
 for _free in (0, 4096, 8192, 12288):  # the products take 15 kB
     case(D, "No space left on device", EXIT_WRITE, default=_free == 8192)(
-        _full(process, _free)).__name__
+        _full(process, _free))
     CASES[-1].id = f"process_disk_full_{_free // 1024}k_free"
 for _name, _cmd, _match, _dflt in (
-        ("simulate", simulate, "needs about", True),  # refused before writing: size known
+        ("simulate", simulate, "needs about", False),  # refused before writing: size known
         ("import", imports, "needs about", False),
-        ("track", track, "No space left on device", True)):
+        ("track", track, "No space left on device", False)):
     case(D, _match, EXIT_WRITE, default=_dflt)(_full(_cmd, 0))
     CASES[-1].id = f"{_name}_disk_full"
 
@@ -189,7 +189,7 @@ J = "write failure (injected)"
 for _cmd, _spec, _match, _dflt in (
         (process, "ENOSPC@0", "No space left", False),
         (process, "ENOSPC@3000", "No space left", False),
-        (process, "EIO@12000", "Input/output error", True),
+        (process, "EIO@12000", "Input/output error", False),
         (process, "EDQUOT@8000", "quota", False),
         (simulate, "ENOSPC@60000", "No space left", True),
         (simulate, "EIO@2000", "Input/output error", False),
@@ -353,7 +353,7 @@ def recording_of_dead_swmr_writer(d):
 M = "memory limit"
 
 
-@case(M, "out of memory in stage 'cbf'", EXIT_MEMORY, default=True)
+@case(M, "out of memory in stage 'cbf'", EXIT_MEMORY)
 def process_allocation_above_address_space_limit(d):
     return process(d, chain="huge.toml")
 
@@ -361,7 +361,7 @@ def process_allocation_above_address_space_limit(d):
 CASES[-1].rlimit_as = 3 << 30
 
 
-@case(M, "out of memory", EXIT_MEMORY)
+@case(M, "out of memory", EXIT_MEMORY, default=True)
 def process_resident_above_max_memory(d):
     return [*process(d), "--max-memory", "100M"]
 

@@ -159,7 +159,7 @@ def _complete(p: Path, what: str) -> bool:
         return False
 
 
-def kill_trial(base: Path, work: Path, what: str, delay: float) -> list[str]:
+def kill_trial(base: Path, work: Path, what: str, delay: float) -> tuple[list[str], str]:
     """SIGKILL ``what`` ``delay`` s after its handlers are installed (its whole process group:
     the machine dying), then run it again (``batch --resume``): at most a ``.part`` after the
     kill, none after the second run, complete outputs, inputs unchanged."""
@@ -183,6 +183,8 @@ def kill_trial(base: Path, work: Path, what: str, delay: float) -> list[str]:
     outs = [work / "out.h5"] if what != "batch" else [work / "out" / f"r{i}.h5"
                                                        for i in range(3)]
     left = set(snapshot(work)) - set(before)
+    outcome = ("part left" if any(".part" in Path(k).name for k in left) else
+               "output complete" if any(Path(k) in outs for k in left) else "nothing written")
     for k in sorted(left):
         name = Path(k).name
         if Path(k) in outs:
@@ -204,27 +206,38 @@ def kill_trial(base: Path, work: Path, what: str, delay: float) -> list[str]:
     changed = [k for k in before if after.get(k) != before[k]]
     if changed:
         problems.append(f"inputs changed: {changed}")
-    return problems
+    return problems, outcome
 
 
 KILLS = {"process": 2.5, "simulate": 2.0, "batch": 12.0}  # delays drawn in [0, this) s
 
 
-@pytest.mark.parametrize("what", ["process", "simulate"])
-def test_sigkill_then_rerun(what, base, tmp_path):
+def _one_kill(what: str, base: Path, tmp_path: Path) -> None:
     delay = float(np.random.default_rng(sum(map(ord, what))).uniform(0, KILLS[what]))
-    problems = kill_trial(base, tmp_path / "w", what, delay)
-    assert not problems, f"{what} killed at {delay:.2f} s: {problems}"
+    problems, outcome = kill_trial(base, tmp_path / "w", what, delay)
+    assert not problems, f"{what} killed at {delay:.2f} s ({outcome}): {problems}"
+
+
+def test_sigkill_process_then_rerun(base, tmp_path):
+    _one_kill("process", base, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("what", ["simulate", "batch"])
+def test_sigkill_then_rerun(what, base, tmp_path):
+    _one_kill(what, base, tmp_path)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("what", ["process", "simulate", "batch"])
 def test_sigkill_many(what, base, tmp_path):
     rng = np.random.default_rng(2026 + len(what))
-    bad = []
+    bad, outcomes = [], []
     for k in range(5):
         delay = float(rng.uniform(0, KILLS[what]))
-        problems = kill_trial(base, tmp_path / f"w{k}", what, delay)
+        problems, outcome = kill_trial(base, tmp_path / f"w{k}", what, delay)
+        outcomes.append(f"{delay:.2f} s: {outcome}")
         if problems:
             bad.append(f"{delay:.2f} s: {problems}")
+    print(f"SIGKILL {what}: {outcomes}")
     assert not bad, f"{what}: {bad}"
