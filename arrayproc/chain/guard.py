@@ -15,7 +15,7 @@ itself):
   the command exits with :data:`arrayproc.errors.EXIT_MEMORY`.
 
 The limit (:func:`run_limit`): ``--max-memory`` or ``ARRAYPROC_MAX_MEMORY`` when given, else
-90 % of the tightest of the machine's RAM, the cgroup's ``memory.max`` and the process's
+90 % of the tightest of the machine's RAM, the cgroup's memory limit and the process's
 ``RLIMIT_AS``/``RLIMIT_DATA`` — below where the system would kill the process.
 """
 
@@ -144,7 +144,7 @@ def resident_bytes() -> float:
 
 
 def system_limit() -> float:
-    """The tightest of the machine's RAM, the cgroup's ``memory.max`` and the process's
+    """The tightest of the machine's RAM, the cgroup's memory limit and the process's
     address-space and data limits, bytes (inf when none is known)."""
     found = []
     try:
