@@ -75,6 +75,13 @@ def make_fault_base(d: Path) -> None:
         w.set_nav(time=np.array([0.0, 10.0]), position=np.zeros((2, 2)), heading=np.zeros(2))
     (d / "big.toml").write_text(CHAIN_BIG)
     (d / "huge.toml").write_text(CHAIN_HUGE)
+    # longer runs for the SIGKILL trials: 60 s of 8 channels, a 30 s scenario
+    x = np.random.default_rng(4).standard_normal((60000, 8)).astype(np.float32)
+    with RecordingWriter(d / "kill.h5", 1000.0, 8, positions=line_array(8, 0.75),
+                         chunk_samples=2048) as w:
+        w.append(x)
+    scen = (d / "scenario.toml").read_text()
+    (d / "kill_scenario.toml").write_text(scen.replace("duration = 2.0", "duration = 30.0"))
     with ProductsWriter(d / "btr.h5", source="long.h5") as w:  # what `plot` reads
         g = w.group("btr", "btr")
         g.set("cone_deg", np.linspace(0.0, 180.0, 19))
