@@ -226,6 +226,23 @@ def _max_memory(args: argparse.Namespace) -> float | None:
     return parse_bytes(text)
 
 
+def _pending_stop(e: BaseException) -> Interrupted | None:
+    """The stop behind an exception: one it wraps, or a stop signal that arrived before it
+    (an interrupt raised inside an import comes back as that import's ImportError)."""
+    stop = _stop_cause(e)
+    if stop is None:
+        from arrayproc.io.atomic import graceful, stop_requested
+        signum = stop_requested()
+        if signum is not None and not graceful():
+            stop = Interrupted(signum)
+    return stop
+
+
+def _stopped(stop: Interrupted) -> int:
+    print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
+    return 128 + stop.signum
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         from arrayproc.app.catalogue import resolve_names
@@ -234,6 +251,8 @@ def _run(args: argparse.Namespace) -> int:
         with MemoryWatch(run_limit(_max_memory(args))):  # every stage and tracker
             return int(args.func(args) or 0)
     except ArrayprocError as e:
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
         print(f"arrayproc: error: {' '.join(str(e).split())}", file=sys.stderr)
         return int(getattr(e, "exit_status", 2))
     except Interrupted as e:
@@ -246,21 +265,24 @@ def _run(args: argparse.Namespace) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
-    except MemoryError:
+    except MemoryError as e:
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
         from arrayproc.chain.guard import memory_error
-        e = memory_error()
-        print(f"arrayproc: error: {e}", file=sys.stderr)
-        return e.exit_status
+        err = memory_error()
+        print(f"arrayproc: error: {err}", file=sys.stderr)
+        return err.exit_status
     except OSError as e:  # the environment: disk full, permissions, I/O errors
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
         from arrayproc.io.atomic import WRITE_ERRNOS
         where = f"{e.filename}: " if e.filename else ""
         print(f"arrayproc: error: {where}{e.strerror or e}", file=sys.stderr)
         return EXIT_WRITE if e.errno in WRITE_ERRNOS else 2
     except Exception as e:
-        stop = _stop_cause(e)
+        stop = _pending_stop(e)
         if stop is not None:  # a signal raised where Python wraps it (e.g. in __set_name__)
-            print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
-            return 128 + stop.signum
+            return _stopped(stop)
         if os.environ.get("ARRAYPROC_DEBUG"):
             raise
         print(f"arrayproc: internal error: {type(e).__name__}: {' '.join(str(e).split())} "

@@ -243,3 +243,39 @@ def test_sigkill_many(what, base, tmp_path):
             bad.append(f"{delay:.2f} s: {problems}")
     print(f"SIGKILL {what}: {outcomes}")
     assert not bad, f"{what}: {bad}"
+
+
+# -- a stop signal during start-up --------------------------------------------------------------
+def _caught(pid: int) -> bool:
+    try:
+        text = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = int(next(x.split()[1] for x in text.splitlines() if x.startswith("SigCgt:")), 16)
+    return bool(mask >> (signal.SIGTERM - 1) & 1)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_signal_in_the_first_tenth_of_a_second(sig, base, tmp_path):
+    """A signal 0-0.1 s after arrayproc's first line ran (``app/early.py``; the imports of
+    numpy, h5py and the stages follow) stops like one later: 128 + N, one line, nothing
+    left. Before arrayproc's first line is the interpreter's own start-up (docs/reliability.md)."""
+    d = tmp_path / "w"
+    shutil.copytree(base, d)
+    before = snapshot(d)
+    rng = np.random.default_rng(int(sig))
+    delays = []
+    for _ in range(2):
+        p = command(["process", str(d / "long.h5"), "-c", str(d / "big.toml"), "-o",
+                     str(d / "out.h5"), "--no-progress", "-q"])
+        t0 = time.monotonic()
+        while not _caught(p.pid) and p.poll() is None and time.monotonic() - t0 < 30:
+            time.sleep(0.0005)
+        delay = float(rng.uniform(0, 0.1))
+        delays.append(delay)
+        time.sleep(delay)
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=120)
+        problems = problems_of(p.returncode, err, 128 + int(sig), "interrupted by")
+        assert not problems, f"signal {int(sig)} at +{delay:.3f} s: {problems}"
+        assert snapshot(d) == before
