@@ -556,9 +556,10 @@ def run_batch(inputs: Sequence[str | os.PathLike], chain: str | os.PathLike,
 
 
 def _clean_partials(target: Path) -> None:
-    """Remove temporary files an interrupted run left for ``target``."""
-    for p in target.parent.glob(f".{target.name}.*.part"):
-        p.unlink(missing_ok=True)
+    """Remove temporary files an interrupted or killed run left for ``target`` (those no live
+    writer holds: :func:`arrayproc.io.atomic.remove_stale_parts`)."""
+    from arrayproc.io.atomic import remove_stale_parts
+    remove_stale_parts(target)
 
 
 def summary(results: Sequence[TaskResult]) -> str:
@@ -569,6 +570,9 @@ def summary(results: Sequence[TaskResult]) -> str:
     line = f"{done} done, {skipped} skipped, {len(failed)} failed of {len(results)} inputs"
     if failed:
         line += ": " + "; ".join(f"{r.recording.name} ({r.error})" for r in failed)
+        if any("cannot write the output" in r.error for r in failed):
+            line += ("; the outputs that could not be written are not left behind: free space "
+                     "and run the same command with --resume to complete them")
     return line
 
 

@@ -20,6 +20,11 @@ Outputs are written to a temporary file and renamed, so a failed run leaves noth
 
 from __future__ import annotations
 
+from arrayproc.app import early as _early
+
+if _early.as_command():  # the `arrayproc` script: stop signals recorded from here on
+    _early.install()
+
 import argparse
 import importlib
 import os
@@ -30,7 +35,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from arrayproc.errors import ArrayprocError, Interrupted
+from arrayproc.errors import EXIT_MEMORY, EXIT_WRITE, ArrayprocError, Interrupted
 
 #: Modules that add sub-commands: each defines ``add_parser(sub)``. A new command module
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
@@ -43,6 +48,18 @@ STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
                      if hasattr(signal, n))
 
 EX_SOFTWARE = 70  # sysexits.h: internal software error
+
+#: The exit statuses, as ``arrayproc --help`` lists them (docs/reliability.md).
+EXIT_STATUSES = f"""exit status:
+  0    done
+  1    batch: some inputs failed (the summary names them; --resume runs them again)
+  2    bad input, configuration or argument, or a damaged input file (one line names it)
+  {EX_SOFTWARE}   internal error (a bug; ARRAYPROC_DEBUG=1 shows the traceback)
+  {EXIT_WRITE}   an output could not be written: disk full, quota, I/O error, read-only
+       file system (nothing was left behind)
+  {EXIT_MEMORY}   the run reached its memory limit (--max-memory, ARRAYPROC_MAX_MEMORY or
+       the process's limit); the line names the stage
+  128+N  stopped by signal N: 130 SIGINT, 143 SIGTERM, 129 SIGHUP (no output written)"""
 
 
 def warn(msg: str) -> None:
@@ -79,7 +96,8 @@ class _Version(argparse.Action):
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``arrayproc`` parser with the sub-commands of every :data:`COMMAND_MODULES`."""
-    p = _Parser(prog="arrayproc", description=__doc__.splitlines()[0])
+    p = _Parser(prog="arrayproc", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action=_Version)
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -202,14 +220,44 @@ def _stop_cause(e: BaseException) -> Interrupted | None:
     return None
 
 
+def _max_memory(args: argparse.Namespace) -> float | None:
+    """The ``--max-memory`` of a command that has it, in bytes."""
+    text = getattr(args, "max_memory", None)
+    if text is None:
+        return None
+    from arrayproc.chain.guard import parse_bytes
+    return parse_bytes(text)
+
+
+def _pending_stop(e: BaseException) -> Interrupted | None:
+    """The stop behind an exception: one it wraps, or a stop signal that arrived before it
+    (an interrupt raised inside an import comes back as that import's ImportError)."""
+    stop = _stop_cause(e)
+    if stop is None:
+        from arrayproc.io.atomic import graceful, stop_requested
+        signum = stop_requested()
+        if signum is not None and not graceful():
+            stop = Interrupted(signum)
+    return stop
+
+
+def _stopped(stop: Interrupted) -> int:
+    print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
+    return 128 + stop.signum
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         from arrayproc.app.catalogue import resolve_names
         resolve_names(args)  # -c NAME: a shipped chain, tracker, TMA or scenario by name
-        return int(args.func(args) or 0)
+        from arrayproc.chain.guard import MemoryWatch, run_limit
+        with MemoryWatch(run_limit(_max_memory(args))):  # every stage and tracker
+            return int(args.func(args) or 0)
     except ArrayprocError as e:
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
         print(f"arrayproc: error: {' '.join(str(e).split())}", file=sys.stderr)
-        return 2
+        return int(getattr(e, "exit_status", 2))
     except Interrupted as e:
         print(f"arrayproc: error: {e}; no output written", file=sys.stderr)
         return 128 + e.signum
@@ -220,19 +268,24 @@ def _run(args: argparse.Namespace) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
-    except MemoryError:
-        print("arrayproc: error: out of memory (try a smaller block size or fewer beams)",
-              file=sys.stderr)
-        return 2
+    except MemoryError as e:
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
+        from arrayproc.chain.guard import memory_error
+        err = memory_error()
+        print(f"arrayproc: error: {err}", file=sys.stderr)
+        return err.exit_status
     except OSError as e:  # the environment: disk full, permissions, I/O errors
+        if _pending_stop(e) is not None:
+            return _stopped(_pending_stop(e))
+        from arrayproc.io.atomic import WRITE_ERRNOS
         where = f"{e.filename}: " if e.filename else ""
         print(f"arrayproc: error: {where}{e.strerror or e}", file=sys.stderr)
-        return 2
+        return EXIT_WRITE if e.errno in WRITE_ERRNOS else 2
     except Exception as e:
-        stop = _stop_cause(e)
+        stop = _pending_stop(e)
         if stop is not None:  # a signal raised where Python wraps it (e.g. in __set_name__)
-            print(f"arrayproc: error: {stop}; no output written", file=sys.stderr)
-            return 128 + stop.signum
+            return _stopped(stop)
         if os.environ.get("ARRAYPROC_DEBUG"):
             raise
         print(f"arrayproc: internal error: {type(e).__name__}: {' '.join(str(e).split())} "
@@ -250,12 +303,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     from arrayproc.io.atomic import clear_stop, discard_all
     clear_stop()
     old = _install_handlers()
+    early = list(_early.EARLY)
+    _early.EARLY.clear()
     old_show = warnings.showwarning
     warnings.showwarning = _show_warning
     old_unraisable = sys.unraisablehook
     sys.unraisablehook = _quiet_unraisable(old_unraisable)
     try:
         try:
+            if early:  # a signal during start-up, before the handlers: the same stop
+                raise Interrupted(early[0])
             args = build_parser().parse_args(argv)
             args.started = started
             from arrayproc.app import logs

@@ -38,7 +38,7 @@ def export(files: Sequence[str], to: str, output: str,
         Selections (raven), lines (rep) or groups (netcdf, zarr) written.
     """
     from arrayproc.io import exports
-    from arrayproc.io.atomic import commit, discard, temporary_sibling
+    from arrayproc.io.atomic import atomic_path
     if to not in FORMATS:
         raise ConfigError(f"export: --to must be one of {', '.join(FORMATS)}, not {to!r}")
     if to != "raven" and len(files) != 1:
@@ -49,12 +49,7 @@ def export(files: Sequence[str], to: str, output: str,
             check_output(output, list(files))
         return write_arrays(files[0], output, to)
     check_output(output, list(files))
-    tmp = temporary_sibling(output)
-    try:
+    with atomic_path(output) as tmp:
         n = (exports.write_raven(list(files), str(tmp)) if to == "raven"
              else exports.write_rep(files[0], str(tmp), origin=origin))
-        commit(tmp, output)
-    except BaseException:
-        discard(tmp)
-        raise
     return n

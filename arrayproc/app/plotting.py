@@ -59,7 +59,7 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
         raise ArrayprocError(f"--range-db must be a finite number > 0 dB, got {range_db:g}")
     if beam is not None and not finite(beam):
         raise ArrayprocError(f"--beam must be a finite cone angle in deg, got {beam:g}")
-    from arrayproc.io.atomic import commit, discard, temporary_sibling
+    from arrayproc.io.atomic import atomic_path
     fmt = _image_format(output)
     from arrayproc.io.h5 import open_h5
     open_h5(file, "products file").close()
@@ -71,13 +71,8 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
     if not truth:
         options["truth"] = False
     from arrayproc.plots import plot_file
-    tmp = temporary_sibling(output).with_suffix("." + fmt)
-    try:
+    with atomic_path(output, suffix="." + fmt) as tmp:
         plot_file(file, str(tmp), kind, **options)
-        commit(tmp, output)
-    except BaseException:
-        discard(tmp)
-        raise
     return kind
 
 

@@ -11,6 +11,9 @@ use them), per stage:
   stage's band (all ``nfft/2 + 1`` without one);
 * any other stage: two copies of its input block.
 
+At run time, :mod:`arrayproc.chain.guard` covers every stage and tracker: a run whose
+resident memory nears the limit stops cleanly, naming the stage.
+
 It is an order-of-magnitude guard (the default limit is half the machine's RAM), not an
 accounting: what it must catch are parameters such as 10⁸ beams that would exhaust the machine
 before reading any data.
@@ -20,38 +23,14 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from collections.abc import Mapping
 from typing import Any
 
+from arrayproc.chain.guard import parse_bytes
 from arrayproc.errors import ConfigError
 
-_UNITS = {"": 1, "b": 1, "k": 1 << 10, "kb": 1 << 10, "kib": 1 << 10, "m": 1 << 20,
-          "mb": 1 << 20, "mib": 1 << 20, "g": 1 << 30, "gb": 1 << 30, "gib": 1 << 30,
-          "t": 1 << 40, "tb": 1 << 40, "tib": 1 << 40}
-
-
-def parse_bytes(text: str) -> float:
-    """A size such as ``500M``, ``4G``, ``1.5GiB`` or ``1000000`` in bytes.
-
-    Parameters
-    ----------
-    text : str
-        Number with an optional unit (k, M, G, T; powers of 1024).
-
-    Returns
-    -------
-    float
-        Bytes (> 0).
-    """
-    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-z]*)\s*", str(text))
-    if not m or m.group(2).lower() not in _UNITS:
-        raise ConfigError(f"--max-memory: expected a size such as 500M or 4G, got {text!r}")
-    v = float(m.group(1)) * _UNITS[m.group(2).lower()]
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"--max-memory: must be a finite size > 0, got {text!r}")
-    return v
-
+__all__ = ["check_chain_memory", "default_limit", "estimate_chain_bytes", "machine_memory",
+           "parse_bytes"]
 
 def machine_memory() -> float:
     """Physical memory of the machine, bytes (0 when unknown)."""

@@ -36,8 +36,10 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     cfg = load_tracker_config(config)  # configuration errors first, before the products are read
     if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
         check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
+    from arrayproc.chain.guard import running
     from arrayproc.track.runner import run_tracker
-    run_tracker(products, config, output, progress=progress, cfg=cfg)
+    with running(f"the tracker of {Path(config).name}"):  # named by the memory guard
+        run_tracker(products, config, output, progress=progress, cfg=cfg)
 
 
 def _products_source(products: str) -> str | None:
@@ -78,12 +80,15 @@ def tma(products: str, config: str, output: str, progress: bool = False) -> None
     if rec is not None:
         inputs.append(rec)  # the recording whose navigation and geometry are read
     check_output(output, inputs)
+    from arrayproc.chain.guard import running
     from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
     if is_tracks_file(products):  # one solution per confirmed track
-        run_tracks_tma(products, config, output, progress=progress)
+        with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
+            run_tracks_tma(products, config, output, progress=progress)
         return
     from arrayproc.track.batch.run import run_tma
-    run_tma(products, config, output, progress=progress)
+    with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
+        run_tma(products, config, output, progress=progress)
 
 
 def tracks_summary(path: str) -> str:

@@ -11,6 +11,7 @@ from typing import Any
 
 from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
+from arrayproc.chain.guard import named
 from arrayproc.chain.stage import STAGES, Stage
 from arrayproc.config import Param, Schema, parse_toml, positive
 from arrayproc.errors import ConfigError
@@ -166,7 +167,7 @@ def compose(spec: ChainSpec, source: Iterable[Block]) -> tuple[list[Iterator[Blo
 
     feed_from(None)
     for i, stage in enumerate(spec.stages):
-        outputs[stage.name] = stage(feeds[i])
+        outputs[stage.name] = named(stage.name, stage(feeds[i]))  # the memory guard
         queues_of[stage.name] = feed_queues[i]
         feed_from(stage.name)
     leaves = [s.name for s in spec.stages if not consumers.get(s.name)]

@@ -22,7 +22,17 @@ from arrayproc.errors import FormatError
 from arrayproc.geo.nav import Nav
 from arrayproc.geo.pose import Pose
 from arrayproc.io.geometry import body_to_world
-from arrayproc.io.h5 import _attr_str, attr_number, attr_str, get_object, open_h5, read_numeric
+from arrayproc.io.h5 import (
+    _attr_str,
+    attr_number,
+    attr_str,
+    damage_reason,
+    first_bad_row,
+    get_object,
+    open_h5,
+    read_numeric,
+    stored_rows,
+)
 from arrayproc.io.pings import ActivePings, Replica, read_active
 from arrayproc.io.recording_writer import (
     DEFAULT_SOUND_SPEED,
@@ -104,6 +114,8 @@ class Recording:
             raise FormatError(f"{p}: /time_data has non-numeric type {td.dtype}")
         self._td = td
         self.n_samples, n_all = (int(s) for s in td.shape)
+        # rows a writer declared but never wrote (it died): reads stop there (self.read)
+        self.damaged_from = None if self.swmr else stored_rows(td)
         if "sample_freq" not in td.attrs:
             raise FormatError(f"{p}: /time_data has no sample_freq attribute")
         self.fs = attr_number(p, td, "sample_freq")
@@ -250,7 +262,19 @@ class Recording:
         start = max(0, int(start))
         if stop <= start:
             return np.zeros((0, self.n_channels), dtype=dtype)
-        raw = self._td[start:stop]
+        if self.damaged_from is not None and stop > self.damaged_from:
+            k = self.damaged_from
+            raise FormatError(f"{self.path}: /time_data holds fewer samples than it declares: "
+                              f"stored up to t = {k / self.fs:.3f} s (sample {k}) of "
+                              f"{self.n_samples / self.fs:.3f} s declared (its writer stopped "
+                              "before writing the rest); the samples before it read")
+        try:
+            raw = self._td[start:stop]
+        except (OSError, ValueError, RuntimeError) as e:
+            if self.swmr:
+                raise
+            bad, text = first_bad_row(self._td, start, stop)
+            self._damaged(bad, damage_reason(text or str(e)))
         if self._select is not None:
             raw = raw[:, self._select]
         x = np.asarray(raw, dtype=dtype)
@@ -265,6 +289,11 @@ class Recording:
             self.n_nonfinite += int(bad.sum())
             x[bad] = 0.0
         return x
+
+    def _damaged(self, row: int, why: str) -> None:
+        """Stop a read at damaged samples, naming the time at which the damage starts."""
+        raise FormatError(f"{self.path}: /time_data is damaged from t = {row / self.fs:.3f} s "
+                          f"(sample {row}): {why}; the samples before it read")
 
     def refresh(self) -> int:
         """Samples now in the file: re-reads ``/time_data``'s length, which a writer in SWMR

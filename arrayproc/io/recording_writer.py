@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from arrayproc.errors import FormatError
-from arrayproc.io.atomic import AtomicH5Writer, check_stop
+from arrayproc.io.atomic import AtomicH5Writer, check_free_space, check_stop
 
 FORMAT = "arrayproc.recording"
 FORMAT_VERSION = 1
@@ -26,20 +26,27 @@ class RecordingWriter(AtomicH5Writer):
     successful close; on an exception inside a ``with`` block it is removed, so a reader never
     sees a half-written recording. ``live=True`` (a recorder) writes the file in place in SWMR
     mode instead: :meth:`flush` after appends, and ``arrayproc process --follow`` processes
-    it while it grows.
+    it while it grows. ``expected_samples``, when the length is known (``simulate``,
+    ``import``), refuses at once an output its folder has no room for
+    (:func:`arrayproc.io.atomic.check_free_space`).
     """
 
     def __init__(self, path: str | os.PathLike, fs: float, n_channels: int,
                  positions: np.ndarray | None = None, sound_speed: float = DEFAULT_SOUND_SPEED,
                  start_time: str | None = None, dtype: np.dtype | type = np.float32,
                  units: str = "Pa", chunk_samples: int | None = None,
-                 attrs: dict[str, Any] | None = None, live: bool = False) -> None:
+                 attrs: dict[str, Any] | None = None, live: bool = False,
+                 expected_samples: int | None = None) -> None:
         super().__init__(path, fs, n_channels, positions, sound_speed, start_time, dtype,
-                         units, chunk_samples, attrs, live=live)
+                         units, chunk_samples, attrs, expected_samples, live=live)
 
     def _start(self, fs: float, n_channels: int, positions: np.ndarray | None,
                sound_speed: float, start_time: str | None, dtype: np.dtype | type, units: str,
-               chunk_samples: int | None, attrs: dict[str, Any] | None) -> None:
+               chunk_samples: int | None, attrs: dict[str, Any] | None,
+               expected_samples: int | None = None) -> None:
+        if expected_samples is not None:  # the size is known: refuse before writing
+            check_free_space(self.path, float(expected_samples) * int(n_channels)
+                             * np.dtype(dtype).itemsize)
         if not (np.isfinite(fs) and fs > 0):
             raise FormatError(f"{self.path}: sample rate must be a finite number > 0 Hz, "
                               f"got {fs}")
@@ -59,7 +66,7 @@ class RecordingWriter(AtomicH5Writer):
             chunk_samples = max(256, (1 << 20) // (np.dtype(dtype).itemsize * n_channels))
         self._td = self._f.create_dataset(
             "time_data", shape=(0, n_channels), maxshape=(None, n_channels), dtype=dtype,
-            chunks=(int(chunk_samples), n_channels))
+            chunks=(int(chunk_samples), n_channels), fletcher32=True)  # damage found on read
         self._td.attrs["sample_freq"] = float(fs)
         self._td.attrs["units"] = units
         if positions is not None:
@@ -73,6 +80,7 @@ class RecordingWriter(AtomicH5Writer):
         self._td.resize(self.n_samples + n, axis=0)
         self._td[self.n_samples:self.n_samples + n] = data
         self.n_samples += n
+        self.check()  # a failed write stops here (disk full, I/O error)
 
     def set_calibration(self, text: str) -> None:
         """The ``/time_data`` attribute ``calibration``: how the samples were turned into

@@ -254,8 +254,8 @@ def import_wavs(paths: Sequence[str | os.PathLike], out: str | os.PathLike,
         scale, fir = calibration.scale(), calibration.response_filter(ref.fs)
     with RecordingWriter(out, ref.fs, n_ch, positions=positions, sound_speed=sound_speed,
                          start_time=start_time, units="Pa" if scale or fir else "FS",
-                         attrs={"imported_from": ", ".join(str(i.path.name) for i in infos)}
-                         ) as w:
+                         attrs={"imported_from": ", ".join(str(i.path.name) for i in infos)},
+                         expected_samples=n) as w:
         if calibration is not None:
             w.set_calibration(calibration.describe())
         for s in range(0, n, chunk):

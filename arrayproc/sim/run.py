@@ -324,7 +324,7 @@ def simulate(scen: Scenario, out_path: str | Path,
              "seed": scen.seed}
     with RecordingWriter(out_path, scen.fs, sim.n_channels, positions=sim.nominal,
                          sound_speed=scen.sound_speed, start_time=scen.start_time,
-                         attrs=attrs) as w:
+                         attrs=attrs, expected_samples=n) as w:
         for k0 in range(0, n, scen.chunk):
             k1 = min(n, k0 + scen.chunk)
             w.append(sim.render(k0, k1))
