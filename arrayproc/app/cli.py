@@ -33,7 +33,8 @@ from arrayproc.errors import ArrayprocError, Interrupted
 #: Modules that add sub-commands: each defines ``add_parser(sub)``. A new command module
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
 COMMAND_MODULES: tuple[str, ...] = ("arrayproc.app.commands", "arrayproc.app.batch",
-                                     "arrayproc.app.demo", "arrayproc.app.catalogue")
+                                     "arrayproc.app.demo", "arrayproc.app.catalogue",
+                                     "arrayproc.app.report")
 
 #: Signals that stop a run: exit status 128 + signal number.
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")

@@ -63,6 +63,7 @@ _LIBRARY = {
     "tma": "arrayproc.app.tracking",
     "tracks_summary": "arrayproc.app.tracking",
     "export": "arrayproc.app.export",
+    "report": "arrayproc.app.report",
 }
 
 __all__ = ["Echo", "add_geometry_options", "add_parser", "geometry", *_LIBRARY]

@@ -1,0 +1,116 @@
+"""Opening a report in a real headless browser: Debian's chromium driven by playwright.
+
+Used by the browser test and by ``scripts/report_screenshots.py``. The browser runs with a
+fresh profile, no network services of its own (no sync, updates, QUIC or background
+requests) and no sandbox (the test runs as root in CI containers). :func:`bokeh_state`
+reads what BokehJS built: the document's data sources and how many values each holds, the
+figures' ranges, and whether the canvases were drawn on.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+#: The chromium the project installs (``make browser``: Debian's package).
+CHROMIUM = os.environ.get("ARRAYPROC_CHROMIUM", "/usr/bin/chromium")
+#: Command-line flags of the headless browser.
+CHROMIUM_ARGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                 "--no-first-run", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync")
+
+
+def browser_missing() -> str:
+    """Why the browser cannot run here ('' when it can)."""
+    if not Path(CHROMIUM).is_file():
+        return f"no chromium at {CHROMIUM} (make browser installs Debian's chromium)"
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "playwright is not installed (pip install -e '.[test]')"
+    return ""
+
+
+@contextmanager
+def open_page(html: str | os.PathLike, width: int = 1280, height: int = 900
+              ) -> Iterator[tuple[Any, list[str]]]:
+    """The playwright page of ``html`` (a file) once BokehJS has rendered it, and the list
+    the console errors and page errors are appended to while it is open."""
+    from playwright.sync_api import sync_playwright
+    errors: list[str] = []
+    with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, headless=True, args=list(CHROMIUM_ARGS),
+            viewport={"width": width, "height": height})
+        try:
+            page = ctx.new_page()
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(Path(html).resolve().as_uri())
+            page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0 "
+                                   "&& Bokeh.index && Object.keys(Bokeh.index).length > 0",
+                                   timeout=60_000)
+            page.wait_for_timeout(500)
+            yield page, errors
+        finally:
+            ctx.close()
+
+
+#: JavaScript: every named data source with the number of values in its columns, and the
+#: ranges of every named figure.
+_STATE = """() => {
+  const doc = Bokeh.documents[0];
+  const out = {sources: {}, ranges: {}, titles: {}};
+  for (const m of doc.all_models) {
+    if (m.type === "ColumnDataSource" && m.name) {
+      let n = 0;
+      for (const v of Object.values(m.data)) {
+        for (const x of (v.length !== undefined ? Array.from(v) : [v])) {
+          n += (x && x.length !== undefined) ? x.length : 1;
+        }
+      }
+      out.sources[m.name] = n;
+    }
+    if (m.type === "Figure" && m.name) {
+      out.ranges[m.name] = [m.x_range.start, m.x_range.end, m.y_range.start, m.y_range.end];
+      out.titles[m.name] = m.title ? m.title.text : "";
+    }
+  }
+  return out;
+}"""
+
+
+def bokeh_state(page: Any) -> dict[str, Any]:
+    """``sources`` {name: values held}, ``ranges`` {figure: [x0, x1, y0, y1]} and
+    ``titles`` {figure: text} of the page's Bokeh document."""
+    return page.evaluate(_STATE)
+
+
+def drawn_canvases(page: Any) -> list[int]:
+    """For every canvas of the page (in Bokeh's shadow roots too), the number of distinct
+    pixel colours over a 64×64 grid: a blank canvas has one."""
+    return page.evaluate("""() => {
+      const found = [];
+      const walk = (root) => {
+        for (const el of root.querySelectorAll("*")) {
+          if (el.tagName === "CANVAS") found.push(el);
+          if (el.shadowRoot) walk(el.shadowRoot);
+        }
+      };
+      walk(document);
+      return found.filter(c => c.width > 50 && c.height > 50).map(c => {
+        const g = c.getContext("2d");
+        const d = g.getImageData(0, 0, c.width, c.height).data;
+        const seen = new Set();
+        for (let i = 0; i < 64; i++) for (let j = 0; j < 64; j++) {
+          const x = Math.floor(i * c.width / 64), y = Math.floor(j * c.height / 64);
+          const k = 4 * (y * c.width + x);
+          seen.add(d[k] + "," + d[k + 1] + "," + d[k + 2]);
+        }
+        return seen.size;
+      });
+    }""")
