@@ -39,7 +39,9 @@ def browser_missing() -> str:
 def open_page(html: str | os.PathLike, width: int = 1280, height: int = 900
               ) -> Iterator[tuple[Any, list[str]]]:
     """The playwright page of ``html`` (a file) once BokehJS has rendered it, and the list
-    the console errors and page errors are appended to while it is open."""
+    the console errors and page errors are appended to while it is open. Every request the
+    page makes is also listed, as ``"request: URL"`` unless it is the page itself: a
+    self-contained page makes none."""
     from playwright.sync_api import sync_playwright
     errors: list[str] = []
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
@@ -50,7 +52,10 @@ def open_page(html: str | os.PathLike, width: int = 1280, height: int = 900
             page = ctx.new_page()
             page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
             page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(Path(html).resolve().as_uri())
+            uri = Path(html).resolve().as_uri()
+            page.on("request", lambda r: errors.append(f"request: {r.url}")
+                    if r.url != uri else None)
+            page.goto(uri)
             page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0 "
                                    "&& Bokeh.index && Object.keys(Bokeh.index).length > 0",
                                    timeout=60_000)
@@ -114,3 +119,26 @@ def drawn_canvases(page: Any) -> list[int]:
         return seen.size;
       });
     }""")
+
+
+#: JavaScript: the viewport position (px) of data point (x, y) of the figure named ``name``,
+#: after scrolling the figure into view.
+_TO_PIXELS = """([name, x, y]) => {
+  for (const root of Object.values(Bokeh.index)) {
+    const v = root.owner.query_one((w) => w.model.name === name);
+    if (!v) continue;
+    v.el.scrollIntoView({block: "center"});
+    const box = v.el.getBoundingClientRect();
+    return [box.x + v.frame.x_scale.compute(x), box.y + v.frame.y_scale.compute(y)];
+  }
+  return null;
+}"""
+
+
+def data_point(page: Any, name: str, x: float, y: float) -> tuple[float, float]:
+    """Viewport pixel (px) of data coordinates (x, y) on the figure named ``name`` (the
+    figure is scrolled into view first)."""
+    p = page.evaluate(_TO_PIXELS, [name, x, y])
+    if p is None:
+        raise LookupError(f"no figure named {name!r} on the page")
+    return float(p[0]), float(p[1])
