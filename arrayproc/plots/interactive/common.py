@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from arrayproc.io.text import as_text
+from arrayproc.plots._passive import true_bearings  # noqa: F401  (the sections' import)
 
 #: Width of a full-width figure (px); heights are set per figure.
 WIDTH = 1100
@@ -72,19 +73,6 @@ def source_recording(root: dict[str, Any]) -> str:
             except Exception:  # not HDF5 at all: not a recording either
                 continue
     return ""
-
-
-def true_bearings(rec, t: np.ndarray) -> dict[str, np.ndarray]:
-    """True bearing (deg, [0, 360), clockwise from north) from the array's reference point to
-    each truth source at times ``t`` (straight lines at the reception time: for display)."""
-    from arrayproc.geo.angles import true_bearing
-    from arrayproc.io.truth import sources
-    pa = rec.nav.at(t)[0]
-    out = {}
-    for name, s in sources(rec).items():
-        ps = np.stack([np.interp(t, s["time"], s["position"][:, i]) for i in range(2)], -1)
-        out[name] = np.degrees(true_bearing(ps[:, 0] - pa[:, 0], ps[:, 1] - pa[:, 1]))
-    return out
 
 
 def finite_range(*arrays: np.ndarray, pad: float = 0.0) -> tuple[float, float]:
