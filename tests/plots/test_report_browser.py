@@ -22,7 +22,7 @@ from arrayproc.plots.interactive.browser import (
     drawn_canvases,
     open_page,
 )
-from tests.plots.report_data import other_kinds, passive_run
+from tests.plots.report_data import other_kinds
 
 #: The figures of a page with every section, and the data sources each must fill.
 FIGURES = ("btr", "lofar", "bearings_port", "bearings_starboard", "track_map",
@@ -33,7 +33,7 @@ SOURCES = ("btr_source", "lofar_source", "lofar_all", "btr_detections", "bearing
 
 
 @pytest.fixture(scope="module")
-def page_file(tmp_path_factory):
+def page_file(tmp_path_factory, towed_run):
     why = browser_missing()
     if why:
         if os.environ.get("CI", "").lower() == "true":
@@ -42,7 +42,7 @@ def page_file(tmp_path_factory):
     from arrayproc.app.report import report
     d = tmp_path_factory.mktemp("report")
     out = d / "report.html"
-    report([passive_run(d), *other_kinds(d)], out)
+    report([towed_run, *other_kinds(d)], out)
     return out
 
 
