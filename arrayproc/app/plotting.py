@@ -24,10 +24,8 @@ RECORDING_PLOTS = ("spectrogram", "geometry")
 
 def default_plot_kind(path: str) -> str:
     """The plot kind for a products file: the first of tracks, tma, btr, lofar, contacts,
-    bearings; for a recording, its spectrogram."""
-    from arrayproc.io.products import is_products, product_kinds
-    if not is_products(path):
-        return "spectrogram"
+    bearings (a recording needs ``--kind spectrogram`` or ``geometry``)."""
+    from arrayproc.io.products import product_kinds
     kinds = product_kinds(path)
     for k in PLOT_PRIORITY:
         if k in kinds:
