@@ -13,7 +13,9 @@ when its products are present:
 * :mod:`~arrayproc.plots.interactive.summary`: the summary table (recording, chain,
   durations, counts);
 * :mod:`~arrayproc.plots.interactive.page`: the page itself, with BokehJS inlined
-  (``bokeh.resources.INLINE``) so it opens offline and fetches nothing.
+  (``bokeh.resources.INLINE``) so it opens offline and fetches nothing;
+* :mod:`~arrayproc.plots.interactive.browser`: the page opened in headless chromium
+  (playwright), for the browser test and the screenshots.
 
 Large products are decimated to a bounded size by :mod:`~arrayproc.plots.interactive.decimate`
 and the page says what was decimated and how. Bokeh draws the figures and runs the linking in

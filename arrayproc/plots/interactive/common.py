@@ -66,11 +66,12 @@ def source_recording(root: dict[str, Any]) -> str:
     for key in ("recording", "source"):
         p = as_text(root.get(key, ""))
         if p and Path(p).is_file():
+            from arrayproc.errors import FormatError
             from arrayproc.io.products import is_products
             try:
                 if not is_products(p):
                     return p
-            except Exception:  # not HDF5 at all: not a recording either
+            except (FormatError, OSError):  # not HDF5 at all: not a recording either
                 continue
     return ""
 

@@ -18,8 +18,9 @@ N_SIGMA, ELLIPSES_PER_TRACK = 2.0, 8
 
 def ellipse_params(cov2: np.ndarray, n_sigma: float = N_SIGMA) -> tuple[float, float, float]:
     """(width, height, angle) of the ``n_sigma`` ellipse of a 2×2 covariance, for Bokeh's
-    ``ellipse`` glyph: full axes in the covariance's unit squared-rooted, angle in rad
-    counter-clockwise from the x axis to the width axis (the major one)."""
+    ``ellipse`` glyph: the full axes, 2·n_sigma·√λ of the eigenvalues λ (in the square root
+    of the covariance's unit), and the angle (rad, counter-clockwise from the x axis) of the
+    width axis, the major one."""
     w, v = np.linalg.eigh(0.5 * (cov2 + cov2.T))
     w = np.clip(w, 0.0, None)
     return (2 * n_sigma * float(np.sqrt(w[1])), 2 * n_sigma * float(np.sqrt(w[0])),
