@@ -66,11 +66,12 @@ def open_page(html: str | os.PathLike, width: int = 1280, height: int = 900
 
 
 #: JavaScript: every named data source with the number of values in its columns, and the
-#: ranges of every named figure.
+#: ranges of every named figure (``all_models`` from BokehJS 3.2 on, ``_all_models`` in 3.1).
 _STATE = """() => {
   const doc = Bokeh.documents[0];
   const out = {sources: {}, ranges: {}, titles: {}};
-  for (const m of doc.all_models) {
+  const models = doc.all_models !== undefined ? doc.all_models : doc._all_models.values();
+  for (const m of models) {
     if (m.type === "ColumnDataSource" && m.name) {
       let n = 0;
       for (const v of Object.values(m.data)) {
@@ -124,8 +125,16 @@ def drawn_canvases(page: Any) -> list[int]:
 #: JavaScript: the viewport position (px) of data point (x, y) of the figure named ``name``,
 #: after scrolling the figure into view.
 _TO_PIXELS = """([name, x, y]) => {
+  const find = (view) => {
+    if (view.model && view.model.name === name) return view;
+    for (const child of (view.child_views || [])) {
+      const v = find(child);
+      if (v) return v;
+    }
+    return null;
+  };
   for (const root of Object.values(Bokeh.index)) {
-    const v = root.owner.query_one((w) => w.model.name === name);
+    const v = find(root);
     if (!v) continue;
     v.el.scrollIntoView({block: "center"});
     const box = v.el.getBoundingClientRect();
