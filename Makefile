@@ -15,7 +15,7 @@ STAMP     := $(VENV)/.installed-stamp
 LOCK      := requirements.lock
 OLDEST    := requirements-oldest.lock
 
-.PHONY: install test test-slow test-latest test-oldest lock demo lint bench clean
+.PHONY: install browser test test-slow test-latest test-oldest lock demo lint bench clean
 
 $(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
@@ -24,7 +24,20 @@ $(STAMP): pyproject.toml $(LOCK)
 
 install: $(STAMP)
 
-test: install
+# The headless browser of the report's browser test (tests/plots/test_report_browser.py):
+# Debian's chromium, installed with apt-get when it is missing and we are root; otherwise
+# the target says what to install (the test skips locally, and fails in CI, without it).
+CHROMIUM  ?= /usr/bin/chromium
+export ARRAYPROC_CHROMIUM ?= $(CHROMIUM)
+browser:
+	@if [ -x "$(CHROMIUM)" ]; then echo "browser: $(CHROMIUM)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; \
+	else echo "make browser: $(CHROMIUM) is missing; install Debian's chromium" \
+	    "(sudo apt-get install chromium) or give make CHROMIUM=/path/to/chromium;" \
+	    "the report's browser test skips without it (and fails when CI=true)"; fi
+
+test: install browser
 	$(PY) -m pytest -q
 
 test-slow: install

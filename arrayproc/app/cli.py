@@ -41,7 +41,7 @@ from arrayproc.errors import EXIT_MEMORY, EXIT_WRITE, ArrayprocError, Interrupte
 #: (e.g. ``arrayproc.app.tma``) adds its name here.
 COMMAND_MODULES: tuple[str, ...] = ("arrayproc.app.commands", "arrayproc.app.batch",
                                      "arrayproc.app.demo", "arrayproc.app.catalogue",
-                                     "arrayproc.app.listen")
+                                     "arrayproc.app.listen", "arrayproc.app.report")
 
 #: Signals that stop a run: exit status 128 + signal number.
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")

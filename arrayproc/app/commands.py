@@ -64,6 +64,7 @@ _LIBRARY = {
     "tma": "arrayproc.app.tracking",
     "tracks_summary": "arrayproc.app.tracking",
     "export": "arrayproc.app.export",
+    "report": "arrayproc.app.report",
 }
 
 __all__ = ["Echo", "add_geometry_options", "add_parser", "geometry", *_LIBRARY]
@@ -134,7 +135,8 @@ def _run_simulate(args: argparse.Namespace) -> int:
 def _run_plot(args: argparse.Namespace) -> int:
     from arrayproc.app.plotting import plot
     kind = plot(args.file, args.output, kind=args.kind, beam=args.beam,
-                range_db=args.range_db, truth=not args.no_truth)
+                range_db=args.range_db, truth=not args.no_truth, t0=args.t0, t1=args.t1,
+                fmin=args.fmin, fmax=args.fmax, channel=args.channel)
     if not args.quiet:
         print(f"{args.output}: {kind} plot written")
     return 0
@@ -238,12 +240,21 @@ def _add_simulate(sub: Any) -> None:
 
 
 def _add_plot(sub: Any) -> None:
-    s = sub.add_parser("plot", help="plot a products or tracks file")
-    s.add_argument("file", help="products or tracks HDF5 file")
-    s.add_argument("--kind", default=None, help="btr, lofar, track, … (default: the first found)")
+    s = sub.add_parser("plot", help="plot a products, tracks or recording file")
+    s.add_argument("file", help="products or tracks HDF5 file (a recording for the "
+                   "spectrogram and geometry plots)")
+    s.add_argument("--kind", default=None, help="btr, lofar, bearings, bearing_frequency, "
+                   "spectrogram, geometry, track, … (default: the first found)")
     s.add_argument("--beam", type=float, default=None, help="cone angle (deg) for LOFAR")
     s.add_argument("--range-db", type=float, default=20.0, help="displayed dynamic range, dB")
     s.add_argument("--no-truth", action="store_true", help="no truth overlay")
+    for flag, what in (("--t0", "start of the time window shown, s since the recording's "
+                        "start"), ("--t1", "end of the time window shown, s"),
+                       ("--fmin", "lowest frequency shown, Hz"),
+                       ("--fmax", "highest frequency shown, Hz")):
+        s.add_argument(flag, type=float, default=None, help=what + " (time/frequency plots)")
+    s.add_argument("--channel", type=int, default=None,
+                   help="channel of the spectrogram (default 0) or detections plot")
     add_output(s, "image file; the extension names the format (.png, .pdf, .svg, …)")
     add_quiet(s)
     s.set_defaults(func=_run_plot)

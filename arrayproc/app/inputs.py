@@ -17,6 +17,8 @@ PLOT_INPUTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "btr": ("btr", ("time", "power_db")),
     "lofar": ("lofar", ("time", "power_db")),
     "track": ("tracks", ("time", "x", "y")),
+    "bearings": ("bearings", ("time", "bearing_port_deg", "bearing_stbd_deg", "snr_db")),
+    "bearing_frequency": ("lofar", ("time", "power_db")),
 }
 
 #: What the bearings tracker reads from its products file (same form as PLOT_INPUTS).

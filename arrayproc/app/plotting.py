@@ -17,11 +17,14 @@ from arrayproc.errors import ArrayprocError
 from arrayproc.io.atomic import check_output
 
 PLOT_PRIORITY = ("tracks", "tma", "btr", "lofar", "contacts", "bearings")
+#: Plots of a recording's samples or array: they take a recording, or a products file whose
+#: recording they read.
+RECORDING_PLOTS = ("spectrogram", "geometry")
 
 
 def default_plot_kind(path: str) -> str:
     """The plot kind for a products file: the first of tracks, tma, btr, lofar, contacts,
-    bearings."""
+    bearings (a recording needs ``--kind spectrogram`` or ``geometry``)."""
     from arrayproc.io.products import product_kinds
     kinds = product_kinds(path)
     for k in PLOT_PRIORITY:
@@ -31,7 +34,9 @@ def default_plot_kind(path: str) -> str:
 
 
 def plot(file: str, output: str, kind: str | None = None, beam: float | None = None,
-         range_db: float = 20.0, truth: bool = True) -> str:
+         range_db: float = 20.0, truth: bool = True, t0: float | None = None,
+         t1: float | None = None, fmin: float | None = None, fmax: float | None = None,
+         channel: int | None = None) -> str:
     """Plot a products or tracks file into an image whose format the extension names.
 
     Parameters
@@ -48,6 +53,12 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
         Displayed dynamic range, dB (finite, > 0).
     truth : bool
         Overlay the truth when the file knows it.
+    t0, t1 : float, optional
+        Time window shown, s since the recording's start, on every time axis.
+    fmin, fmax : float, optional
+        Band shown, Hz, on every frequency axis.
+    channel : int, optional
+        The channel of a spectrogram (default 0).
 
     Returns
     -------
@@ -60,9 +71,12 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
     if beam is not None and not finite(beam):
         raise ArrayprocError(f"--beam must be a finite cone angle in deg, got {beam:g}")
     from arrayproc.io.atomic import atomic_path
+    from arrayproc.plots.limits import Limits
+    limits = Limits(t0, t1, fmin, fmax)
     fmt = _image_format(output)
     from arrayproc.io.h5 import open_h5
-    open_h5(file, "products file").close()
+    open_h5(file, "recording or products file" if kind in RECORDING_PLOTS
+            else "products file").close()
     kind = kind or default_plot_kind(file)
     check_plot_input(file, kind)
     options: dict[str, Any] = {"range_db": range_db}
@@ -70,9 +84,14 @@ def plot(file: str, output: str, kind: str | None = None, beam: float | None = N
         options["beam"] = beam
     if not truth:
         options["truth"] = False
+    if channel is not None:
+        if kind not in ("spectrogram", "detections"):
+            raise ArrayprocError(f"--channel is for the spectrogram and detections plots, "
+                                 f"not {kind}")
+        options["channel"] = int(channel)
     from arrayproc.plots import plot_file
     with atomic_path(output, suffix="." + fmt) as tmp:
-        plot_file(file, str(tmp), kind, **options)
+        plot_file(file, str(tmp), kind, limits=limits, **options)
     return kind
 
 

@@ -38,7 +38,7 @@ def _load() -> None:
         importlib.import_module(f"{__name__}.{m.name}")
 
 
-def plot_file(path: str, out_png: str, kind: str, **options: Any) -> None:
+def plot_file(path: str, out_png: str, kind: str, limits: Any = None, **options: Any) -> None:
     """Draw product ``kind`` of the file at ``path`` into ``out_png``.
 
     Parameters
@@ -49,14 +49,22 @@ def plot_file(path: str, out_png: str, kind: str, **options: Any) -> None:
         Image file; matplotlib picks the format from its extension.
     kind : str
         A registered plot kind (``btr``, ``lofar``, ``track``, …).
+    limits : arrayproc.plots.limits.Limits, optional
+        Time and frequency limits (``--t0/--t1/--fmin/--fmax``), honoured by every time or
+        frequency axis (:mod:`arrayproc.plots.limits`).
     **options
         The plotter's options (``range_db``, ``beam``, ``truth``, …).
     """
     from arrayproc.errors import ArrayprocError
+    from arrayproc.plots.limits import CURRENT, Limits
     _load()
     if kind not in PLOTTERS:
         raise ArrayprocError(f"plot: unknown kind {kind!r} (known: {', '.join(sorted(PLOTTERS))})")
-    PLOTTERS[kind](path, out_png, **options)
+    token = CURRENT.set(limits or Limits())
+    try:
+        PLOTTERS[kind](path, out_png, **options)
+    finally:
+        CURRENT.reset(token)
 
 
 def subplots(ax: Any, layout: Mapping[str, Any]) -> tuple[Any, Any, bool]:
@@ -98,5 +106,7 @@ def write_figure(draw: Callable[[Any], Any], out: str, layout: Mapping[str, Any]
     fig = Figure(**{k: v for k, v in layout.items() if k in _FIGURE_KEYS})
     axes = fig.subplots(**{k: v for k, v in layout.items() if k not in _FIGURE_KEYS})
     draw(axes)
+    from arrayproc.plots.limits import apply
+    apply(fig)  # --t0/--t1/--fmin/--fmax on every time and frequency axis
     finish(fig, True, layout)
     fig.savefig(out, **save)

@@ -1,5 +1,6 @@
-"""Helpers of the delay plots (detections, delays, positions): product lookup by kind and the
-recording a products file was made from."""
+"""Helpers of the delay plots (detections, delays, positions) and of the plots of a
+recording (spectrogram, geometry): product lookup by kind and the recording a products file
+was made from."""
 
 from __future__ import annotations
 
@@ -34,6 +35,20 @@ def source_recording(root: dict[str, Any], path: str, what: str):
         return Recording(src)
     except FormatError as e:
         raise ArrayprocError(f"{path}: cannot open its source recording ({e})") from None
+
+
+def open_recording(path: str, what: str):
+    """The recording at ``path``, or, for a products file, the recording it was made from
+    (its ``source``): the plots of samples and of the array take either."""
+    from arrayproc.io.h5 import attr_str, open_h5
+    from arrayproc.io.products import FORMAT
+    with open_h5(path, "recording or products file") as f:
+        root = dict(f.attrs)
+        products = attr_str(root.get("format", "")) == FORMAT
+    if products:
+        return source_recording(root, path, what)
+    from arrayproc.io.recording import Recording
+    return Recording(path)
 
 
 def ellipse(cov2: np.ndarray, centre: np.ndarray, n_sigma: float = 1.0,

@@ -1,4 +1,4 @@
-"""Helpers shared by the BTR and LOFAR plots: product lookup, colour scale, truth access."""
+"""Helpers shared by the passive plots: product lookup, colour scale, truth access."""
 
 from __future__ import annotations
 
@@ -10,10 +10,11 @@ import numpy as np
 from arrayproc.errors import ArrayprocError, FormatError
 
 
-def find_group(path: str, kind: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The first products group of ``kind`` and the root attributes."""
+def find_group(path: str, kind: str, prod: Any = None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The first products group of ``kind`` and the root attributes (of ``prod``, the file
+    as read, when given)."""
     from arrayproc.io.products import read_products
-    prod = read_products(path)
+    prod = read_products(path) if prod is None else prod
     for g in prod.groups(kind).values():
         if "time" not in g:
             raise ArrayprocError(f"{path}: {kind} product is empty (no rows)")
@@ -45,3 +46,16 @@ def open_truth_recording(root: dict[str, Any]):
         rec.close()
         return None
     return rec
+
+
+def true_bearings(rec, t: np.ndarray) -> dict[str, np.ndarray]:
+    """True bearing (deg, [0, 360), clockwise from north) from the array's reference point to
+    each truth source at times ``t`` (straight lines at the reception time: for display)."""
+    from arrayproc.geo.angles import true_bearing
+    from arrayproc.io.truth import sources
+    pa = rec.nav.at(t)[0]
+    out = {}
+    for name, s in sources(rec).items():
+        ps = np.stack([np.interp(t, s["time"], s["position"][:, i]) for i in range(2)], -1)
+        out[name] = np.degrees(true_bearing(ps[:, 0] - pa[:, 0], ps[:, 1] - pa[:, 1]))
+    return out

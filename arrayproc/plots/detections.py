@@ -8,8 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.io.units import level_label, reference_amplitude
-from arrayproc.plots import finish, register_plot, subplots, write_figure
+from arrayproc.plots import register_plot, write_figure
 from arrayproc.plots._delay import groups_of, source_recording
 
 #: Figure size and resolution of the detections plot.
@@ -82,29 +81,17 @@ def draw_detections(g: dict, x: np.ndarray, fs: float, units: str, ax: Any = Non
     matplotlib Figure
     """
     from matplotlib.patches import Rectangle
-    from scipy.signal import spectrogram
 
+    from arrayproc.plots.spectrogram import draw_spectrogram
     t0, t1 = g.get("time_start", np.zeros(0)), g.get("time_end", np.zeros(0))
     lo, hi = g.get("freq_lo", np.zeros(0)), g.get("freq_hi", np.zeros(0))
-    ch = channel
-    f, t, S = spectrogram(x, fs, window="hann", nperseg=nfft, noverlap=nfft // 2,
-                          scaling="density")
-    ref2 = reference_amplitude(units) ** 2
-    L = 10 * np.log10(np.maximum(S / ref2, 1e-30)).T  # (time, freq)
-    top = float(np.percentile(L, 99.9))
     if fmax is None:
         fmax = min(fs / 2, 2 * float(hi.max())) if hi.size else fs / 2
-    keep = f <= fmax
-    fig, ax, new = subplots(ax, LAYOUT)
-    im = ax.imshow(L[:, keep], aspect="auto", cmap="viridis", vmin=top - range_db, vmax=top,
-                   extent=[f[0], f[keep][-1], t[-1] + nfft / fs / 2, t[0] - nfft / fs / 2],
-                   interpolation="nearest")
-    cb = fig.colorbar(im, ax=ax, pad=0.02)
-    cb.set_label(f"PSD, {level_label(units, '²/Hz')} ({range_db:g} dB range)")
+    title = (title or f"channel {channel} spectrogram with {{n}} detections").replace(
+        "{n}", str(len(t0)))
+    fig = draw_spectrogram(x, fs, units, ax, nfft=nfft, range_db=range_db, fmax=fmax,
+                           title=title)
+    ax = ax if ax is not None else fig.axes[0]
     for a, b, fl, fh in zip(t0, t1, lo, hi):
         ax.add_patch(Rectangle((fl, a), fh - fl, b - a, fill=False, ec="red", lw=1.2))
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("time (s since recording start)")
-    ax.set_title((title or f"channel {ch} spectrogram with {{n}} detections").replace(
-        "{n}", str(len(t0))), fontsize=10)
-    return finish(fig, new, LAYOUT)
+    return fig

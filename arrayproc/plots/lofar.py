@@ -25,8 +25,14 @@ LAYOUT = {"figsize": (9.0, 7.5), "dpi": 110}
 def plot_lofar(path: str, out_png: str, range_db: float = 20.0, beam: float | None = None,
                truth: bool = True) -> None:
     """Draw the LOFAR-gram of the beam nearest cone angle ``beam`` (deg) from the first
-    ``lofar`` group of ``path`` into ``out_png`` (:func:`draw_lofar`)."""
+    ``lofar`` group of ``path`` into ``out_png`` (:func:`draw_lofar`), within the plot's
+    time and band limits."""
+    from arrayproc.plots import limits as lim
     g, root = find_group(path, "lofar")
+    g = lim.select(g, lim.rows(g["time"], what="lofar"), np.size(g["time"]))
+    keep = lim.bins(g["freq"], what="lofar")
+    g = {**g, "freq": np.asarray(g["freq"])[keep],
+         "power_db": np.asarray(g["power_db"])[:, :, keep]}
     write_figure(lambda ax: draw_lofar(g, root, ax, range_db=range_db, beam=beam, truth=truth,
                                        file=Path(path).name), out_png, LAYOUT)
 
