@@ -37,3 +37,23 @@ def write_recording(path: Path, data: np.ndarray, fs: float = 1000.0,
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def dask_scheduler_unchanged(request):
+    """A module that leaves a different default dask scheduler behind (an unclosed
+    ``distributed.Client``) fails here, not in whichever later test computes lazily."""
+    import sys
+
+    def scheduler():
+        dask = sys.modules.get("dask")
+        return dask.config.get("scheduler", None) if dask is not None else None
+
+    before = scheduler()
+    yield
+    after = scheduler()
+    if after != before:
+        import dask
+        dask.config.set(scheduler=before)
+        pytest.fail(f"{request.module.__name__} left dask's default scheduler at {after!r} "
+                    f"(was {before!r})", pytrace=False)

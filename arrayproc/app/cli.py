@@ -336,5 +336,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.unraisablehook = old_unraisable
 
 
+def command() -> None:
+    """The ``arrayproc`` executable: :func:`main`, then exit with its status.
+
+    After a stop signal the process ends with ``os._exit`` once the streams are flushed: the
+    signal may have interrupted a library mid-construction (numba compiling through
+    llvmlite), and the finalisers of such half-built objects would print tracebacks at
+    interpreter shutdown, after the one error line. Every output was already removed by
+    :func:`main` and inputs are only read, so nothing is left for the finalisers to do.
+    """
+    status = main()
+    if status > 128:  # 128 + N: stopped by signal N
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(status)
+    sys.exit(status)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    command()

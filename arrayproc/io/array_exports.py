@@ -56,7 +56,19 @@ def _groups(f: h5py.File) -> list[str]:
             and as_text(g.attrs.get("kind", "")) in KINDS]
 
 
+def _in_process() -> Any:
+    """Compute lazy columns in this process's threads, whatever scheduler a caller made the
+    default (a ``distributed.Client`` sets one): the source file is open here only."""
+    import dask
+    return dask.config.set(scheduler="threads")
+
+
 def _write(f: h5py.File, tmp: Path, to: str) -> int:
+    with _in_process():
+        return _write_groups(f, tmp, to)
+
+
+def _write_groups(f: h5py.File, tmp: Path, to: str) -> int:
     import xarray as xr
     names = _groups(f)
     root = xr.Dataset(attrs={**products_attrs(f), "groups": names,

@@ -14,6 +14,8 @@ def clients():
         out[n] = start_client(workers=n, threads=1)
         out[n][0].wait_for_workers(n)
     yield {n: c for n, (c, _) in out.items()}
-    for c, cluster in out.values():
+    # last opened, first closed: each client restores the dask scheduler it found, so
+    # closing in opening order would leave the second's "dask.distributed" as the default
+    for c, cluster in reversed(list(out.values())):
         c.close()
         cluster.close()

@@ -101,8 +101,10 @@ class MVDR(CovarianceStage):
         f1 = self.steering_form(q1, bins)
         if self.power == "capon" or self.loading == 0:
             return n * n / np.maximum(f1, 1e-300)
-        # N² w^H R w = N² a^H Q R Q a / (a^H Q a)², with Q R Q = Q − δ Q² (Q = (R + δI)⁻¹)
-        q2 = q1 - delta[:, None, None] * (q1 @ q1)
+        # N² w^H R w = N² a^H Q R Q a / (a^H Q a)² (Q = (R + δI)⁻¹), with Q R Q formed as
+        # the product: the identity Q R Q = Q − δQ² cancels catastrophically when δ ≫ λ(R)
+        # (relative error ~ u·δ/λ_min, 3e-9 at δ = 1e7·tr R/N)
+        q2 = q1 @ (r @ q1)
         return n * n * self.steering_form(q2, bins) / np.maximum(f1, 1e-300) ** 2
 
     def steering_form(self, q: np.ndarray, bins: slice) -> np.ndarray:
