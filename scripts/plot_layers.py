@@ -21,16 +21,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import FancyArrowPatch, FancyBboxPatch  # noqa: E402
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    import tomli as tomllib
+from arrayproc.config import read_toml  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
 
 def layers() -> list[list[str]]:
-    cfg = tomllib.loads((REPO / "pyproject.toml").read_text())
+    cfg = read_toml(REPO / "pyproject.toml", "project")[0]
     contract = cfg["tool"]["importlinter"]["contracts"][0]
     return [[p.strip() for p in row.split("|")] for row in contract["layers"]]
 

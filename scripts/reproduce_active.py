@@ -190,12 +190,11 @@ def simulate_schedule(out: Path, duration: float | None) -> Path:
     recording with both replicas and the schedule in /active), optionally lengthened."""
     from importlib.resources import files
 
-    import tomllib
-
+    from arrayproc.config import parse_toml
     from arrayproc.sim.run import simulate
     from arrayproc.sim.scenario import parse_scenario
     text = files("arrayproc.data").joinpath("scenarios/active_hfm_bpsk.toml").read_text()
-    base = tomllib.loads(text)
+    base = parse_toml(text, "active_hfm_bpsk.toml")
     if duration:
         base["recording"]["duration"] = float(duration)
     path = out / "active_hfm_bpsk.h5"

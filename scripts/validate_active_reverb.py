@@ -35,12 +35,11 @@ def recording(out: Path, duration: float, reverb: dict | None, drift: float = 0.
     with its clutter drifting (``drift_speed_std``, m/s)."""
     from importlib.resources import files
 
-    import tomllib
-
+    from arrayproc.config import parse_toml
     from arrayproc.sim.run import simulate
     from arrayproc.sim.scenario import parse_scenario
-    base = tomllib.loads(files("arrayproc.data").joinpath(
-        "scenarios/active_hfm_bpsk.toml").read_text())
+    base = parse_toml(files("arrayproc.data").joinpath(
+        "scenarios/active_hfm_bpsk.toml").read_text(), "active_hfm_bpsk.toml")
     base["recording"]["duration"] = float(duration)
     name = "ideal"
     if reverb is not None:

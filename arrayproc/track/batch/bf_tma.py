@@ -119,6 +119,103 @@ def noise_scale(times: np.ndarray, values: np.ndarray) -> float:
         else 0.0
 
 
+class _Fit:
+    """The weighted residuals (eq. (BF1)) of one set of angle and frequency rows, their
+    Jacobian, the population cost of the global search and the polish."""
+
+    def __init__(self, tau: np.ndarray, ang: np.ndarray, f: np.ndarray, has_f: np.ndarray,
+                 obs: np.ndarray, ov: np.ndarray, hd: np.ndarray | None, c: float,
+                 retarded: bool, sig: list[float]) -> None:
+        self.tau, self.ang, self.f, self.has_f = tau, ang, f, has_f
+        self.obs, self.ov, self.hd, self.c = obs, ov, hd, c
+        self.cr = c if retarded else None
+        self.n, self.n_f = tau.size, int(has_f.sum())
+        self.w = np.concatenate([np.full(self.n, 1.0 / sig[0]), has_f / sig[1]])
+
+    def weigh(self, sig: list[float]) -> None:
+        """New standard deviations (angle, frequency) of the rows."""
+        self.w[:self.n], self.w[self.n:] = 1.0 / sig[0], self.has_f / sig[1]
+
+    def model(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return _model(q, self.tau, self.obs, self.ov, self.hd, self.c, self.cr)
+
+    def res(self, q: np.ndarray) -> np.ndarray:
+        a, fm = self.model(q)
+        ra = self.ang - a if self.hd is not None else _wrap(self.ang - a)
+        return self.w * np.concatenate([ra, self.f - fm])
+
+    def unweighted(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Angle residuals (rad) of every row, frequency residuals (Hz) of the rows with one."""
+        r, n = self.res(q), self.n
+        return r[:n] / self.w[:n], r[n:][self.has_f] / self.w[n:][self.has_f]
+
+    def jac(self, q: np.ndarray) -> np.ndarray:
+        return -self.w[:, None] * _jacobian(q, self.tau, self.obs, self.ov, self.hd, self.c,
+                                            self.cr)
+
+    def cost(self, q: np.ndarray) -> float:
+        return float(np.sum(self.res(q) ** 2))
+
+    def pop_cost(self, p: np.ndarray) -> np.ndarray:
+        hd, n = self.hd, self.n
+        return bf_cost_population(p, self.tau, self.obs, self.ov, self.ang,
+                                  hd if hd is not None else self.ang, hd is not None,
+                                  self.w[:n], self.f, self.w[n:], 1.0 / self.c)
+
+    def polish(self, q0: np.ndarray) -> np.ndarray:
+        return leastsq(self.res, q0, Dfun=self.jac, xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                       maxfev=200)[0]
+
+    def solution(self, q: np.ndarray, sides: tuple[str, str], t0: float, t1: float,
+                 o0: np.ndarray, n_in: int) -> TmaSolution:
+        """The solution at ``q`` with its CRLB (the inverse FIM ``J^T J`` of the weighted
+        residuals) and, for cone angles, the end ``sides`` it was searched on."""
+        n, wj = self.n, self.jac(q)
+        sol = finish_solution("bearings_frequency", t0, t1, q, self.res(q), wj, wj.T @ wj, o0,
+                              np.concatenate(self.model(q)), n_used=n,
+                              n_rejected=n_in - n, n_residuals=n + self.n_f)
+        sol.rss = float(np.sum((self.res(q)[:n] / self.w[:n]) ** 2))
+        if sides[0]:
+            sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
+        return sol
+
+
+def _usable_rows(times, angle_rad, freq_hz, observer_xy, observer_vel, heading_rad,
+                 outliers: bool, poly_degree: int, outlier_k: float) -> tuple:
+    """The finite rows as arrays ``(t, angle, freq, obs, obs_vel, heading, n_in)``, after the
+    polynomial-residue outlier rejection when ``outliers``: a rejected angle drops its row, a
+    rejected frequency only its frequency (NaN); ``n_in`` counts the finite rows before."""
+    t = np.asarray(times, float).reshape(-1)
+    ang = np.asarray(angle_rad, float).reshape(-1)
+    f = np.asarray(freq_hz, float).reshape(-1)
+    obs = np.asarray(observer_xy, float).reshape(t.size, 2)
+    ov = np.asarray(observer_vel, float).reshape(t.size, 2)
+    hd = None if heading_rad is None else np.asarray(heading_rad, float).reshape(-1)
+    ok = np.isfinite(ang) & np.isfinite(t)
+    n_in = int(ok.sum())
+    if outliers and n_in > poly_degree + 2:
+        ok[ok] = reject_outliers(t[ok], np.cos(ang[ok]) if hd is not None
+                                 else np.unwrap(ang[ok]), None, poly_degree, outlier_k)
+        fin = ok & np.isfinite(f)
+        if fin.sum() > poly_degree + 2:  # a rejected frequency leaves its row's angle
+            f = f.copy()
+            bad = np.flatnonzero(fin)[~reject_outliers(t[fin], f[fin], None, poly_degree,
+                                                       outlier_k)]
+            f[bad] = np.nan
+    return (t[ok], ang[ok], f[ok], obs[ok], ov[ok], None if hd is None else hd[ok], n_in)
+
+
+def _searched_state(pop_cost, search: PolarSearch, seed, popsize: int,
+                    maxiter: int) -> np.ndarray:
+    """The kinematic state ``[x, y, ẋ, ẏ]`` at the global minimum of ``pop_cost`` (a
+    population cost of 5-parameter states, ``f0`` profiled out) over one search box,
+    by differential evolution."""
+    de = evolve(lambda q: pop_cost(search.to_state(q)), search.bounds, seed,
+                popsize=popsize, maxiter=maxiter, tol=1e-3, mutation=(0.5, 1.0),
+                recombination=0.9)
+    return search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
+
+
 def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: np.ndarray,
                              observer_xy: np.ndarray, observer_vel: np.ndarray,
                              sigma_rad: float | None, sigma_hz: float | None, *,
@@ -186,25 +283,9 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     >>> bool(np.allclose(sol.state, truth, rtol=1e-6))
     True
     """
-    t = np.asarray(times, float).reshape(-1)
-    ang = np.asarray(angle_rad, float).reshape(-1)
-    f = np.asarray(freq_hz, float).reshape(-1)
-    obs = np.asarray(observer_xy, float).reshape(t.size, 2)
-    ov = np.asarray(observer_vel, float).reshape(t.size, 2)
-    hd = None if heading_rad is None else np.asarray(heading_rad, float).reshape(-1)
-    ok = np.isfinite(ang) & np.isfinite(t)
-    n_in = int(ok.sum())
-    if outliers and n_in > poly_degree + 2:
-        ok[ok] = reject_outliers(t[ok], np.cos(ang[ok]) if hd is not None
-                                 else np.unwrap(ang[ok]), None, poly_degree, outlier_k)
-        fin = ok & np.isfinite(f)
-        if fin.sum() > poly_degree + 2:  # a rejected frequency leaves its row's angle
-            f = f.copy()
-            bad = np.flatnonzero(fin)[~reject_outliers(t[fin], f[fin], None, poly_degree,
-                                                       outlier_k)]
-            f[bad] = np.nan
-    t, ang, f, obs, ov = t[ok], ang[ok], f[ok], obs[ok], ov[ok]
-    hd = None if hd is None else hd[ok]
+    t, ang, f, obs, ov, hd, n_in = _usable_rows(times, angle_rad, freq_hz, observer_xy,
+                                                observer_vel, heading_rad, outliers,
+                                                poly_degree, outlier_k)
     has_f = np.isfinite(f)
     if t.size < 6 or has_f.sum() < 3:
         raise ValueError("bearings + frequency TMA needs at least 6 rows and 3 frequencies, "
@@ -212,31 +293,10 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
     f = np.where(has_f, f, 0.0)        # rows without a frequency: weight 0 on it
     t0 = float(t[0] if t0 is None else t0)
     t1 = float(t[-1] if t1 is None else t1)
-    tau = t - t0
     o0, o1 = _observer_at(t, obs, t0), _observer_at(t, obs, t1)
-    c = float(sound_speed)
-    cr = c if retarded else None
-    n = t.size
-    n_f = int(has_f.sum())
     sig = [sigma_rad or max(noise_scale(t, ang if hd is not None else np.unwrap(ang)), 1e-5),
            sigma_hz or max(noise_scale(t[has_f], f[has_f]), 1e-6)]
-    w = np.concatenate([np.full(n, 1.0 / sig[0]), has_f / sig[1]])
-
-    def res(q: np.ndarray) -> np.ndarray:
-        a, fm = _model(q, tau, obs, ov, hd, c, cr)
-        ra = ang - a if hd is not None else _wrap(ang - a)
-        return w * np.concatenate([ra, f - fm])
-
-    def jac(q: np.ndarray) -> np.ndarray:
-        return -w[:, None] * _jacobian(q, tau, obs, ov, hd, c, cr)
-
-    def pop_cost(p: np.ndarray) -> np.ndarray:
-        return bf_cost_population(p, tau, obs, ov, ang, hd if hd is not None else ang,
-                                  hd is not None, w[:n], f, w[n:], 1.0 / c)
-
-    def polish(q0: np.ndarray) -> np.ndarray:
-        return leastsq(res, q0, Dfun=jac, xtol=1e-12, ftol=1e-12, gtol=1e-12, maxfev=200)[0]
-
+    fit = _Fit(t - t0, ang, f, has_f, obs, ov, hd, float(sound_speed), retarded, sig)
     if hd is None:
         (b0, e0), (b1, e1) = end_value(t, ang, t0), end_value(t, ang, t1)
         searches = {("", ""): PolarSearch(b0, b1, max(np.deg2rad(2.0), 10 * e0, 10 * e1),
@@ -245,44 +305,25 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         searches = end_side_searches(t, ang, hd, t0, t1, o0, o1, min_range_m, max_range_m)
     found = {}
     for sides, search in searches.items():
-        de = evolve(lambda q, s=search: pop_cost(s.to_state(q)), search.bounds, seed,
-                    popsize=popsize, maxiter=maxiter, tol=1e-3, mutation=(0.5, 1.0),
-                    recombination=0.9)
-        x = search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
-        g = doppler_factor(x, tau, obs, ov, c)
-        found[sides] = polish(np.append(x, np.sum(has_f * g * f)
-                                        / np.sum(has_f * g * g)))  # eq. (BF2)
-
-    def cost(q: np.ndarray) -> float:
-        return float(np.sum(res(q) ** 2))
-
-    best = min(found, key=lambda k: cost(found[k]))
+        x = _searched_state(fit.pop_cost, search, seed, popsize, maxiter)
+        g = doppler_factor(x, fit.tau, obs, ov, fit.c)
+        found[sides] = fit.polish(np.append(x, np.sum(has_f * g * f)
+                                            / np.sum(has_f * g * g)))  # eq. (BF2)
+    best = min(found, key=lambda k: fit.cost(found[k]))
     for _ in range(2 if sigma_rad is None or sigma_hz is None else 0):
-        r = res(found[best])                         # unweighted residuals of the best:
-        ra, rf = r[:n] / w[:n], r[n:][has_f] / w[n:][has_f]
-        if sigma_rad is None:                        # the five parameters shared by the kinds
-            sig[0] = max(float(np.sqrt(np.sum(ra**2) / max(n - 2.5, 1.0))), 1e-9)
+        ra, rf = fit.unweighted(found[best])         # the residuals of the best; the five
+        if sigma_rad is None:                        # parameters shared by the two kinds
+            sig[0] = max(float(np.sqrt(np.sum(ra**2) / max(fit.n - 2.5, 1.0))), 1e-9)
         if sigma_hz is None:
-            sig[1] = max(float(np.sqrt(np.sum(rf**2) / max(n_f - 2.5, 1.0))), 1e-9)
-        w[:n], w[n:] = 1.0 / sig[0], has_f / sig[1]
-        found = {k: polish(q) for k, q in found.items()}
-        best = min(found, key=lambda k: cost(found[k]))
-
-    def finish(sides: tuple[str, str]) -> TmaSolution:
-        q = found[sides]
-        wj = jac(q)
-        sol = finish_solution("bearings_frequency", t0, t1, q, res(q), wj, wj.T @ wj, o0,
-                              np.concatenate(_model(q, tau, obs, ov, hd, c, cr)), n_used=n,
-                              n_rejected=n_in - n, n_residuals=n + n_f)
-        sol.rss = float(np.sum((res(q)[:n] / w[:n]) ** 2))
-        if sides[0]:
-            sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
-        return sol
-
-    sol = finish(best)
+            sig[1] = max(float(np.sqrt(np.sum(rf**2) / max(fit.n_f - 2.5, 1.0))), 1e-9)
+        fit.weigh(sig)
+        found = {k: fit.polish(q) for k, q in found.items()}
+        best = min(found, key=lambda k: fit.cost(found[k]))
+    sol = fit.solution(found[best], best, t0, t1, o0, n_in)
     if hd is not None:
         flip = {"port": "starboard", "starboard": "port"}
-        m = finish((flip[best[0]], flip[best[1]]))
+        m = fit.solution(found[(flip[best[0]], flip[best[1]])], (flip[best[0]], flip[best[1]]),
+                         t0, t1, o0, n_in)
         sol.cost_other, m.cost_other = m.cost, sol.cost
         sol.mirror = m
     return sol
