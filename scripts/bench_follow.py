@@ -6,7 +6,7 @@ to the row's appearance on disk (the whole path: the poll, the chain, the stage'
 buffering, the products flush, the reader's poll). Then it checks the live products against
 a run on the finished file (every dataset, bit for bit).
 
-The recorder is ``tests/chain/live_writer.py`` (8 hydrophones at 1 kHz, seeded noise and a
+The recorder is ``arrayproc/evaluate/live_writer.py`` (8 hydrophones at 1 kHz, seeded noise and a
 tone; chunks of ``--chunk`` s, a pause of the same length after each: real time). The chain:
 CBF of 256-sample snapshots (batches of 2), sliding integration of 2, BTR and LOFAR.
 
@@ -32,7 +32,7 @@ sys.path.insert(0, str(REPO))
 from arrayproc.evaluate.compare import same_products  # noqa: E402
 from arrayproc.evaluate.scenarios.follow import follow_chain  # noqa: E402
 
-WRITER = REPO / "tests" / "chain" / "live_writer.py"
+WRITER = REPO / "arrayproc" / "evaluate" / "live_writer.py"
 
 
 def main() -> int:

@@ -1,13 +1,13 @@
 """Validation of the recursive TDOA tracker (thesis 3.2.2.2, eqs. 3.37-3.40) against
 the batch TD-TMA (thesis 3.3.2, eqs. 3.48-3.52) on the same delays.
 
-The thesis's case: a 20 m towed array (``tests/track/data/tdoa_20m_scenario.toml``: 21
+The thesis's case: a 20 m towed array (``scripts/data/tdoa_20m_scenario.toml``: 21
 hydrophones 1 m apart, ownship 3 m/s, 0° then a 45° turn to port at 300 s) and a static
 broadband source placed 2, 5 and 10 km from the ownship's position at t = 150 s, 70° off the
 first leg's bow. For each range the script runs, as separate commands,
 
     arrayproc simulate SCENARIO.toml -o rec.h5
-    arrayproc process rec.h5 -c tests/track/data/tdoa_20m_tde.toml -o del.h5
+    arrayproc process rec.h5 -c scripts/data/tdoa_20m_tde.toml -o del.h5
     arrayproc track del.h5 -c arrayproc/data/trackers/tdoa_static.toml -o trk.h5
     arrayproc track del.h5 -c arrayproc/data/trackers/tdoa_cv.toml -o trk_cv.h5
     arrayproc tma del.h5 -c arrayproc/data/tma/delays.toml -o tma.h5
@@ -38,8 +38,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIO = ROOT / "tests/track/data/tdoa_20m_scenario.toml"
-CHAIN = ROOT / "tests/track/data/tdoa_20m_tde.toml"
+SCENARIO = ROOT / "scripts/data/tdoa_20m_scenario.toml"
+CHAIN = ROOT / "scripts/data/tdoa_20m_tde.toml"
 TRACKERS = {"static": ROOT / "arrayproc/data/trackers/tdoa_static.toml",
             "cv": ROOT / "arrayproc/data/trackers/tdoa_cv.toml"}
 TMA = ROOT / "arrayproc/data/tma/delays.toml"

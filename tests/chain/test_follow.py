@@ -19,12 +19,13 @@ import pytest
 
 from arrayproc.app.commands import latency_line, process
 from arrayproc.chain.reader import count_blocks
+from arrayproc.evaluate import live_writer
 from arrayproc.evaluate.compare import same_products
 from arrayproc.evaluate.scenarios.follow import BLOCK, follow_chain
 from arrayproc.io.recording import Recording
 from tests.conftest import REPO
 
-WRITER = Path(__file__).with_name("live_writer.py")
+WRITER = Path(live_writer.__file__)
 ENV = dict(os.environ, PYTHONPATH=str(REPO))
 
 

@@ -1,12 +1,12 @@
-"""A recorder for the ``--follow`` tests: writes a recording in SWMR mode, appending seeded
-noise plus a tone in chunks with a flush and a pause after each, and logs the wall time of
-every flush. Run as ``python live_writer.py OUT.h5 LOG SECONDS CHUNK_S PAUSE_S [HOLD_S
-[WAIT_FOR]]``; prints ``ready`` once the file can be opened by a follower. ``HOLD_S``: keep
-the file open that long after the last append (a recorder that went quiet). ``WAIT_FOR``: a
-products file; after the first second of samples the writer waits until that file holds
-rows (the follower is up and running) before it goes on. An eighth argument ``nav``: the
-array moves (east at 2 m/s, turning at 3 deg/s) and ``/nav`` grows with the samples, one row
-at the end of each chunk."""
+"""A live recorder for the ``--follow`` tests and benchmark: writes a recording in SWMR
+mode, appending seeded noise plus a tone in chunks with a flush and a pause after each, and
+logs the wall time of every flush. Run as ``python -m arrayproc.evaluate.live_writer OUT.h5
+LOG SECONDS CHUNK_S PAUSE_S [HOLD_S [WAIT_FOR]]``; prints ``ready`` once the file can be
+opened by a follower. ``HOLD_S``: keep the file open that long after the last append (a
+recorder that went quiet). ``WAIT_FOR``: a products file; after the first second of samples
+the writer waits until that file holds rows (the follower is up and running) before it goes
+on. An eighth argument ``nav``: the array moves (east at 2 m/s, turning at 3 deg/s) and
+``/nav`` grows with the samples, one row at the end of each chunk."""
 
 from __future__ import annotations
 
