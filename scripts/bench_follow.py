@@ -30,6 +30,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 from arrayproc.evaluate.compare import same_products  # noqa: E402
+from arrayproc.evaluate.live_writer import wait_ready  # noqa: E402
 from arrayproc.evaluate.scenarios.follow import follow_chain  # noqa: E402
 
 WRITER = REPO / "arrayproc" / "evaluate" / "live_writer.py"
@@ -47,9 +48,9 @@ def main() -> int:
     chain, rec, live, log = follow_chain(tmp), tmp / "rec.h5", tmp / "live.h5", tmp / "writer.json"
     load0 = os.getloadavg()
     w = subprocess.Popen([sys.executable, str(WRITER), str(rec), str(log), str(a.seconds),
-                          str(a.chunk), str(a.chunk), "0", str(live)], stdout=subprocess.PIPE,
+                          str(a.chunk), str(a.chunk), "0", str(live)], stderr=subprocess.PIPE,
                          text=True, env=env)
-    assert w.stdout.readline().strip() == "ready"
+    assert wait_ready(w)
     f = subprocess.Popen([sys.executable, "-m", "arrayproc", "process", str(rec), "-c",
                           str(chain), "-o", str(live), "--follow", "--idle", "3"],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)

@@ -1,8 +1,8 @@
 """A live recorder for the ``--follow`` tests and benchmark: writes a recording in SWMR
 mode, appending seeded noise plus a tone in chunks with a flush and a pause after each, and
 logs the wall time of every flush. Run as ``python -m arrayproc.evaluate.live_writer OUT.h5
-LOG SECONDS CHUNK_S PAUSE_S [HOLD_S [WAIT_FOR]]``; prints ``ready`` once the file can be
-opened by a follower. ``HOLD_S``: keep the file open that long after the last append (a
+LOG SECONDS CHUNK_S PAUSE_S [HOLD_S [WAIT_FOR]]``; logs ``ready`` (stderr) once the file can
+be opened by a follower. ``HOLD_S``: keep the file open that long after the last append (a
 recorder that went quiet). ``WAIT_FOR``: a products file; after the first second of samples
 the writer waits until that file holds rows (the follower is up and running) before it goes
 on. An eighth argument ``nav``: the array moves (east at 2 m/s, turning at 3 deg/s) and
@@ -11,6 +11,7 @@ on. An eighth argument ``nav``: the array moves (east at 2 m/s, turning at 3 deg
 from __future__ import annotations
 
 import json
+import logging
 import sys
 import time
 
@@ -18,6 +19,8 @@ import h5py
 import numpy as np
 
 from arrayproc.io.recording import RecordingWriter
+
+_log = logging.getLogger(__name__)
 
 FS = 1000.0
 N_CH = 8
@@ -74,7 +77,7 @@ def main() -> None:
                                      dtype=float, chunks=(64,) + shape)
             grow_nav(track, 0.0)
         w.flush()
-        print("ready", flush=True)
+        _log.info("ready")  # the follower may open the file now
         for a in range(0, x.shape[0], step):
             w.append(x[a:a + step])
             if nav:
@@ -91,5 +94,16 @@ def main() -> None:
         json.dump(times, f)
 
 
+def wait_ready(proc) -> bool:
+    """Read a recorder's stderr (a ``subprocess.Popen`` with ``stderr=PIPE``, text) up to its
+    ``ready`` line; False when it ended first."""
+    for line in proc.stderr:
+        if line.strip() == "ready":
+            return True
+    return False
+
+
 if __name__ == "__main__":
+    # the readiness line on stderr, which the follower's side waits for
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     main()

@@ -21,6 +21,7 @@ from arrayproc.app.commands import latency_line, process
 from arrayproc.chain.reader import count_blocks
 from arrayproc.evaluate import live_writer
 from arrayproc.evaluate.compare import same_products
+from arrayproc.evaluate.live_writer import wait_ready
 from arrayproc.evaluate.scenarios.follow import BLOCK, follow_chain
 from arrayproc.io.recording import Recording
 from tests.conftest import REPO
@@ -35,8 +36,8 @@ def _writer(tmp_path: Path, seconds: float, hold: float = 0.0,
     rec, log = tmp_path / "rec.h5", tmp_path / "writer.json"
     w = subprocess.Popen([sys.executable, str(WRITER), str(rec), str(log), str(seconds), "0.2",
                           "0.1", str(hold), str(tmp_path / "live.h5")] + (["nav"] if nav else []),
-                         stdout=subprocess.PIPE, text=True, env=ENV, cwd=REPO)
-    assert w.stdout.readline().strip() == "ready"
+                         stderr=subprocess.PIPE, text=True, env=ENV, cwd=REPO)
+    assert wait_ready(w)
     return w, rec
 
 
