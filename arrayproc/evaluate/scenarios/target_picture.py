@@ -19,13 +19,14 @@ turns in every one, so that each source's range is observable from bearings:
 - :data:`LONG_FOUR` (20 min) — four contacts at 3-7 km with unsteady tonals (finite coherence
   time, fading), two turns.
 
+:data:`SHORT_TURN` (4 min, one source) is the reduced check of the default test suite.
 :func:`scenario_toml` returns a scenario's TOML text (``arrayproc simulate`` input).
 """
 
 from __future__ import annotations
 
 __all__ = ["SCENARIOS", "scenario_toml", "TOWSHIP_MASKING", "QUIET_SUBMERGED", "CROSSING",
-           "ENDFIRE_TURN", "LONG_FOUR"]
+           "ENDFIRE_TURN", "LONG_FOUR", "SHORT_TURN"]
 
 _HEAD = """[recording]
 fs = 2048.0
@@ -263,6 +264,33 @@ tonals = [{ freq = 441.0, level_db = 142.0, coherence_time = 40.0 },
 [source.broadband]
 band = [100.0, 800.0]
 level_db = 95.0
+"""
+
+#: a reduced check of the whole chain (the default test suite): 4 minutes, one source on the
+#: starboard bow at 2.6 km, a 50° turn to port after 100 s
+SHORT_TURN = _HEAD.format(duration=240.0, seed=16, tow_freq=83.0, tow_db=115.0) + """
+[ownship]
+start = [0.0, 0.0]
+[[ownship.leg]]
+course = 0.0
+speed_kn = 5.0
+duration = 100.0
+[[ownship.leg]]
+course = 310.0
+speed_kn = 5.0
+turn_rate = 1.0
+duration = 140.0
+
+[[source]]
+name = "contact"
+start = [1800.0, 1900.0]
+depth = 10.0
+course = 250.0
+speed_kn = 7.0
+tonals = [{ freq = 231.0, level_db = 147.0 }, { freq = 462.0, level_db = 142.0 }]
+[source.broadband]
+band = [60.0, 900.0]
+level_db = 110.0
 """
 
 #: name → scenario TOML text, in the table's order
