@@ -1,5 +1,6 @@
 """How much of the last two thirds of a simulated run each source is held by one confirmed
-track, from a multi-target ``tracks`` file and the truth of its recording.
+track, from a multi-target ``tracks`` file and the truth of its recording
+(:func:`arrayproc.evaluate.held.held_last_two_thirds`).
 
 For each source, over the scans of the window (t ≥ t_end − ⅔·(t_end − t_start), every scan,
 detected or not): its principal track is the confirmed track within ``--gate`` degrees of its
@@ -17,55 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 
-import numpy as np
-
-from arrayproc.config import resolve_beside
-from arrayproc.io import truth as truth_mod
-from arrayproc.io.products import read_products
-from arrayproc.io.recording import Recording
-from arrayproc.io.text import as_text
-from arrayproc.track.manage.tracks import status_names
-
-
-def held_last_two_thirds(path: str, gate_deg: float = 5.0) -> dict:
-    """Per source: held share of the window, principal track id, extra tracks; false
-    confirmed tracks (module doc)."""
-    prod = read_products(path)
-    g = prod["tracks"]
-    rec = resolve_beside(as_text(prod["/"].get("recording", "")), path)
-    tid = np.asarray(g["track_id"], np.int64)
-    conf = status_names(g["status"]) == "confirmed"
-    t = np.asarray(g["time"], float)
-    cone = np.asarray(g["cone_deg"], float)
-    times = np.unique(t)
-    with Recording(rec, require_geometry=False) as r:
-        truth = truth_mod.cone_angles(r, times)
-    names = sorted(truth)
-    t0 = times[-1] - 2.0 / 3.0 * (times[-1] - times[0])
-    win = times >= t0
-    ti = np.searchsorted(times, t)
-    near = {n: conf & (np.abs(cone - truth[n][ti]) <= gate_deg) for n in names}
-    out = {"sources": names, "held": [], "principal": [], "extra": [], "false_tracks": []}
-    ids = np.unique(tid[conf])
-    for n in names:
-        inwin = near[n] & win[ti]
-        counts = {int(i): int(np.unique(ti[inwin & (tid == i)]).size) for i in ids}
-        best = max(counts, key=counts.get) if counts and max(counts.values()) else -1
-        out["principal"].append(best)
-        out["held"].append(round(counts.get(best, 0) / int(win.sum()), 3))
-        extra = [int(i) for i in ids if i != best
-                 and (near[n] & (tid == i)).sum() > 0.5 * (conf & (tid == i)).sum()]
-        out["extra"].append(extra)
-    for i in ids:
-        mine = conf & (tid == i)
-        hit = np.zeros(mine.sum(), bool)
-        for n in names:
-            hit |= near[n][mine]
-        if mine.sum() >= 3 and hit.mean() <= 0.5:
-            out["false_tracks"].append(int(i))
-    out["n_confirmed"] = int(ids.size)
-    out["window_s"] = [round(float(t0), 1), round(float(times[-1]), 1)]
-    return out
+from arrayproc.evaluate.held import held_last_two_thirds
 
 
 def main() -> None:

@@ -19,8 +19,10 @@ least ``min_rows`` of its rows, else ``bearings``.
 A track's frequencies: a tracks file of the lines+bearings tracker holds each point's
 measurement (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``, ``meas_freq_hz``, and
 ``meas_tonal`` the tonal slot it updated); its rows are read from there, and the frequencies
-are those of the tonal slot most rows updated (one rest frequency ``f0``; the other rows, broadband
-bearings or other tonals, enter with their angle alone). A tracks file of bearings alone
+are those of the tonal with the most rows (one rest frequency ``f0``; the other rows, broadband
+bearings or other tonals, enter with their angle alone). A tonal is a run of the track's line
+frequencies with no gap wider than :data:`TONAL_GAP_HZ` (:func:`tonal_labels`), not a tonal
+slot of the tracker: a slot may hold two tonals one after the other. A tracks file of bearings alone
 (``row`` indexes the products' ``bearings`` group, or the ``lines`` group named by
 ``tma.group``, whose ``freq_hz`` then gives the frequencies) is read through its products file.
 
@@ -57,9 +59,13 @@ from .run import (
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["is_tracks_file", "TrackRows", "read_track_rows", "track_method", "run_tracks_tma"]
+__all__ = ["is_tracks_file", "TrackRows", "read_track_rows", "tonal_labels", "track_method",
+           "run_tracks_tma", "TONAL_GAP_HZ"]
 
 _CONFIRMED = STATUS_CODES[Status.CONFIRMED.value]
+#: line rows of one track whose sorted frequencies are further apart than this are two tonals,
+#: Hz (a few FFT bins of the shipped chain's 1 Hz; a tonal's own rows are far denser)
+TONAL_GAP_HZ = 2.0
 
 
 def is_tracks_file(path: str) -> bool:
@@ -187,8 +193,8 @@ def _own_measurements(g: dict, mask: np.ndarray, cfg: dict[str, Any]) -> dict[st
     """One track's measurements from a tracks group that holds them per point
     (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``, ``meas_freq_hz``,
     ``meas_tonal``): the points that used a row, one per time; ``freq`` the frequencies of
-    the tonal slot that most rows updated (NaN on the other rows: broadband bearings or other
-    tonals), None when no row has one."""
+    the tonal (:func:`tonal_labels`) with the most rows (NaN on the other rows: broadband
+    bearings or other tonals), None when no row has one."""
     used = mask & (np.asarray(g["row"]).reshape(-1) >= 0)
     if "row_kind" in g:
         used &= np.asarray(g["row_kind"]).reshape(-1) >= 0
@@ -211,13 +217,33 @@ def _own_measurements(g: dict, mask: np.ndarray, cfg: dict[str, Any]) -> dict[st
                 else np.zeros(idx.size, np.int64))
         on = np.isfinite(f) & (slot >= 0)
         if on.any():
-            best = np.bincount(slot[on]).argmax()
-            freq = np.where(on & (slot == best), f, np.nan)
+            label = tonal_labels(f, on)
+            best = np.bincount(label[on]).argmax()
+            freq = np.where(on & (label == best), f, np.nan)
     cols = {"time": t[idx], "port": col["meas_port_deg"], "stbd": col["meas_stbd_deg"],
             "azimuth": None, "freq": freq}
     m = select_rows(cols, np.arange(idx.size))
     m["rows"] = np.asarray(g["row"]).reshape(-1)[idx]
     return m
+
+
+def tonal_labels(freq: np.ndarray, on: np.ndarray, gap_hz: float = TONAL_GAP_HZ
+                 ) -> np.ndarray:
+    """One label per tonal of a track's line rows: the rows ``on`` sorted by frequency, split
+    where neighbouring frequencies are more than ``gap_hz`` apart (−1 off the rows ``on``).
+
+    A tracker's tonal slot is not one tonal: a slot freed by a faded tonal takes the next, and
+    one tonal may move between slots, so the slot label mixes tonals that one rest frequency
+    ``f0`` cannot fit. One tonal's received frequencies form one dense run however far its
+    Doppler sweeps (the rows are seconds apart, its rate at most a few tens of mHz/s);
+    two tonals are split by a gap with no rows in it."""
+    label = np.full(freq.size, -1, np.int64)
+    i = np.flatnonzero(on)
+    if i.size == 0:
+        return label
+    order = i[np.argsort(freq[i], kind="stable")]
+    label[order] = np.r_[0, np.cumsum(np.diff(freq[order]) > gap_hz)]
+    return label
 
 
 def track_method(meas: dict[str, Any], cfg: dict[str, Any]) -> str:

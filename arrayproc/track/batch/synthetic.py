@@ -150,25 +150,43 @@ def write_line_array_scenario(folder: str, nav: OwnTrack, sources: dict[str, Sou
 
 def with_measurements(tracks: str | os.PathLike, out: str | os.PathLike, prod: str,
                       freq: np.ndarray) -> None:
-    """Copy a bearings tracks file adding the columns of a lines+bearings tracks file: each
-    point's measurement (``meas_cone_deg``, ``meas_port_deg``, ``meas_stbd_deg``), its
-    frequency ``meas_freq_hz`` (``freq`` of the row it used), ``meas_tonal`` (slot 0) and
-    ``row_kind`` (1 lines; −1 coasted); ``measurements`` = ``lines+bearings``. For checking
-    the per-track TMA on measurement-level tracks as the lines+bearings tracker writes them
+    """Copy a tracks file writing, for every point, the columns of a lines+bearings tracks
+    file with a frequency on every row: its measurement (``meas_cone_deg``, ``meas_port_deg``,
+    ``meas_stbd_deg``), its frequency ``meas_freq_hz`` (``freq`` of the bearings row it used,
+    or the ``freq_hz`` of the line it used), ``meas_tonal`` (slot 0) and ``row_kind`` (1 lines;
+    −1 coasted); ``measurements`` = ``lines+bearings``. A point's ``row`` indexes the products'
+    ``bearings`` group, or its ``lines`` group where the tracker wrote ``row_kind`` = 1 (a
+    lines+bearings tracker); columns it already holds are replaced. For checking the
+    per-track TMA on measurement-level tracks as the lines+bearings tracker writes them
     (:mod:`.per_track`)."""
     shutil.copy(tracks, out)
+    keys = ("cone_deg", "bearing_port_deg", "bearing_stbd_deg")
     with h5py.File(prod, "r") as p:
-        b = {k: p[f"bearings/{k}"][()] for k in ("cone_deg", "bearing_port_deg",
-                                                 "bearing_stbd_deg")}
+        b = {k: p[f"bearings/{k}"][()] for k in keys}
+        b["freq_hz"] = np.asarray(freq, float)
+        ln = ({k: p[f"lines/{k}"][()] for k in keys + ("freq_hz",)} if "lines" in p else None)
     with h5py.File(out, "a") as f:
-        r = f["tracks/row"][()]
-        on = r >= 0
-        rs = np.maximum(r, 0)
         g = f["tracks"]
-        for k, col in (("meas_cone_deg", "cone_deg"), ("meas_port_deg", "bearing_port_deg"),
-                       ("meas_stbd_deg", "bearing_stbd_deg")):
-            g.create_dataset(k, data=np.where(on, b[col][rs], np.nan))
-        g.create_dataset("meas_freq_hz", data=np.where(on, freq[rs], np.nan))
-        g.create_dataset("meas_tonal", data=np.where(on, 0, -1).astype(np.int64))
-        g.create_dataset("row_kind", data=np.where(on, 1, -1).astype(np.int8))
+        r = g["row"][()]
+        kind = g["row_kind"][()] if "row_kind" in g else np.where(r >= 0, 0, -1)
+        on = (r >= 0) & (kind >= 0)
+        is_line = on & (kind == 1)
+        if is_line.any() and ln is None:
+            raise ValueError(f"{tracks}: points updated by lines but {prod} has no lines group")
+        rs = np.maximum(r, 0)
+
+        def pick(col: str) -> np.ndarray:
+            v = np.where(on, b[col][np.where(is_line, 0, rs)], np.nan)
+            if is_line.any():
+                v = np.where(is_line, ln[col][np.where(is_line, rs, 0)], v)
+            return v
+
+        cols = {"meas_cone_deg": pick("cone_deg"), "meas_port_deg": pick("bearing_port_deg"),
+                "meas_stbd_deg": pick("bearing_stbd_deg"), "meas_freq_hz": pick("freq_hz"),
+                "meas_tonal": np.where(on, 0, -1).astype(np.int64),
+                "row_kind": np.where(on, 1, -1).astype(np.int8)}
+        for k, v in cols.items():
+            if k in g:
+                del g[k]
+            g.create_dataset(k, data=v)
         g.attrs["measurements"] = "lines+bearings"

@@ -231,7 +231,10 @@ def track_lines(scans: list[tuple[float, np.ndarray, np.ndarray]], cfg: dict[str
     hw = cfg.get("hit_window")
     window = {} if hw is None else {"window": int(hw[1]), "min_hits": int(hw[0])}
     distinct = TonalDistinct(filt, float(ll["same_source_deg"]), int(ll["same_source_scans"]))
-    delete = DeletionRule(max_misses=cfg["max_misses"], **window, pos=(0, 1, 2, 3),
+    # duplicates compared on the two mirror bearings, not their rates: the rates of two
+    # tracks of one source born at different times differ most in a turn, where the bearing
+    # of the mirror sweeps at twice the turn rate, and say nothing of which source they hold
+    delete = DeletionRule(max_misses=cfg["max_misses"], **window, pos=(0, 1),
                           merge_d2=float(b["merge_d2"]), distinct=distinct)
     mgr = TrackManager(filt, init, assoc,
                        confirm=cfg["confirm"], delete=delete)

@@ -203,3 +203,18 @@ def test_same_as_the_products_path_on_the_endfire_turn(tmp_path):
         np.testing.assert_allclose(b.crlb, a.crlb, rtol=1e-9)
         e = a.state - T.TRUTH[0][:a.state.size]
         assert e @ np.linalg.solve(a.crlb, e) < chi2.ppf(0.997, a.state.size)
+
+
+def test_tonal_labels_split_two_tonals_and_keep_one_doppler_sweep():
+    """A slot that held 176 Hz and then 528 Hz is two tonals; one tonal's Doppler sweep over
+    3 Hz in dense rows stays one; rows off (NaN, broadband) are −1."""
+    from arrayproc.track.batch.per_track import tonal_labels
+    sweep = np.linspace(175.5, 178.5, 60)
+    f = np.r_[sweep, np.full(5, np.nan), np.linspace(528.0, 529.0, 30)]
+    on = np.isfinite(f)
+    lab = tonal_labels(f, on)
+    assert np.all(lab[~on] == -1)
+    assert np.unique(lab[:60]).size == 1 and np.unique(lab[65:]).size == 1
+    assert lab[0] != lab[-1]
+    # the tracks' rows pick the tonal with the most rows, not the slot with the most rows
+    assert np.bincount(lab[on]).argmax() == lab[0]
