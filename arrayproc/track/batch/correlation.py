@@ -24,6 +24,15 @@ at τ̂ (central differences), and ``se(τ) = τ̂ se(log τ)`` (the delta metho
 [δ_min/4, 20 T] (δ_min the shortest sampling step, T the span); an estimate on a bound is
 returned with ``at_bound`` set (white residuals give the lower one).
 
+The bearings of a peak picker also scatter from scan to scan (white noise of σ_w): the
+residuals are then ``r_b = e_b + v_b``, ``v_b ~ N(0, σ_w²)`` (eq. C4), whose exponential fit
+alone gives a τ far too short (measured: 2.6 s for τ = 20 s with σ_w = σ). With ``white``
+the likelihood of (C4) is that of the Kalman filter's innovations of the AR(1) state (C1)
+observed in white noise, the total variance s² = σ² + σ_w² profiled out as above and the
+share ρ = σ²/s² a second parameter, maximised over (log τ, logit ρ) (a grid, then
+Nelder-Mead); se(log τ) from the inverse Hessian there (the curvature in log τ alone when ρ̂
+lies on its bound).
+
 The residuals of a fit are not quite the errors: the three fitted parameters absorb the
 slowest components, so τ̂ is biased low when τ is not small against the window (a few per
 cent for τ = T/30; see docs/validation/compact.md for the measured estimates).
@@ -65,6 +74,8 @@ class CorrelationEstimate:
         ℓ_p(τ̂) (eq. C3).
     at_bound : bool
         τ̂ lies on a bound of the search interval.
+    white_sigma : float
+        σ̂ of the white part (eq. C4); 0 for the exponential model alone.
     """
 
     tau_s: float
@@ -72,6 +83,7 @@ class CorrelationEstimate:
     sigma: float
     loglik: float
     at_bound: bool
+    white_sigma: float = 0.0
 
 
 def _prepare(times: np.ndarray, residuals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -125,7 +137,7 @@ def profile_loglik(times: np.ndarray, residuals: np.ndarray, tau_s: float) -> fl
 
 def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
                               bounds: tuple[float, float] | None = None,
-                              n_grid: int = 48) -> CorrelationEstimate:
+                              n_grid: int = 48, white: bool = False) -> CorrelationEstimate:
     """Maximum-likelihood τ of exponentially correlated residuals (eqs. C1-C3).
 
     Parameters
@@ -138,6 +150,9 @@ def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
         Search interval of τ (s); default [δ_min/4, 20 T].
     n_grid : int
         Log-spaced nodes of the coarse search.
+    white : bool
+        Model the residuals as the exponential error plus white noise (eq. C4); τ̂ is then
+        that of the exponential part, ``white_sigma`` the white noise's σ̂.
 
     Returns
     -------
@@ -149,6 +164,12 @@ def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
                                                  20.0 * float(t[-1] - t[0]))
     if not 0 < lo < hi:
         raise ValueError(f"bounds must satisfy 0 < lo < hi, got ({lo}, {hi})")
+    if white:
+        g, rho, ll, s2, se_g = _white_fit(dt, r, lo, hi, n_grid)
+        at_bound = g - math.log(lo) < 1e-3 or math.log(hi) - g < 1e-3
+        tau = math.exp(g)
+        return CorrelationEstimate(tau, tau * se_g, math.sqrt(rho * s2), ll, bool(at_bound),
+                                   math.sqrt((1.0 - rho) * s2))
     grid = np.linspace(math.log(lo), math.log(hi), n_grid)
     ll = np.array([_profile(math.exp(g), dt, r)[0] for g in grid])
     k = int(np.argmax(ll))
@@ -167,10 +188,80 @@ def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
     return CorrelationEstimate(tau, se, math.sqrt(s2), best, bool(at_bound))
 
 
+def _profile_white(tau: float, rho: float, dt: np.ndarray, r: np.ndarray
+                   ) -> tuple[float, float]:
+    """(ℓ_p, ŝ²) of an exponential error plus white noise (eq. C4) by the Kalman filter's
+    innovations: the exponential share ``rho`` of the total variance s² (profiled out)."""
+    phi = np.exp(-dt / tau)
+    q = rho * -np.expm1(-2.0 * dt / tau)  # process noise of the unit-variance AR(1) part
+    w = 1.0 - rho
+    n = r.size
+    x, pp = 0.0, rho
+    nu2 = np.empty(n)
+    ss = np.empty(n)
+    for b in range(n):
+        if b:
+            x, pp = phi[b - 1] * x, phi[b - 1] ** 2 * pp + q[b - 1]
+        sb = pp + w
+        nu = r[b] - x
+        k = pp / sb
+        x, pp = x + k * nu, (1.0 - k) * pp
+        nu2[b], ss[b] = nu * nu, sb
+    s2 = float(np.mean(nu2 / ss))
+    if not s2 > 0:
+        return -math.inf, 0.0
+    return (-0.5 * n * (math.log(2.0 * math.pi * s2) + 1.0) - 0.5 * float(np.sum(np.log(ss))),
+            s2)
+
+
+def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int
+               ) -> tuple[float, float, float, float, float]:
+    """(log τ̂, ρ̂, ℓ_p, ŝ², se(log τ)) of eq. (C4): a grid over log τ and ρ, then Nelder-Mead
+    on (log τ, logit ρ), the standard error from the inverse Hessian of ℓ_p there."""
+    from scipy.optimize import minimize
+
+    u_max = 9.0  # ρ ≤ 1 − 1.2e-4: the white share's lower bound
+
+    def nll(v: np.ndarray) -> float:
+        g = min(max(v[0], math.log(lo)), math.log(hi))
+        u = min(max(v[1], -u_max), u_max)
+        return -_profile_white(math.exp(g), 1.0 / (1.0 + math.exp(-u)), dt, r)[0]
+
+    best = (math.inf, 0.0, 0.0)
+    for g in np.linspace(math.log(lo), math.log(hi), max(n_grid // 3, 8)):
+        for u in (-2.0, 0.0, 2.0, 5.0):
+            f = nll(np.array([g, u]))
+            if f < best[0]:
+                best = (f, g, u)
+    res = minimize(nll, np.array(best[1:]), method="Nelder-Mead",
+                   options={"xatol": 1e-5, "fatol": 1e-7, "maxiter": 400})
+    v = res.x if res.fun <= best[0] else np.array(best[1:])
+    v = np.array([min(max(v[0], math.log(lo)), math.log(hi)), min(max(v[1], -u_max), u_max)])
+    h = 0.02
+    hess = np.empty((2, 2))
+    for i in range(2):
+        for j in range(2):
+            ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
+            hess[i, j] = (nll(v + ei + ej) - nll(v + ei - ej) - nll(v - ei + ej)
+                          + nll(v - ei - ej)) / (4 * h * h)
+    if abs(v[1]) >= u_max - 1e-6:  # on the ρ bound: the profile in log τ alone
+        var_g = 1.0 / hess[0, 0] if hess[0, 0] > 0 else math.inf
+    else:
+        try:
+            cov = np.linalg.inv(hess)
+            var_g = float(cov[0, 0]) if cov[0, 0] > 0 and np.all(np.linalg.eigvalsh(hess) > 0) \
+                else math.inf
+        except np.linalg.LinAlgError:
+            var_g = math.inf
+    rho = 1.0 / (1.0 + math.exp(-v[1]))
+    ll, s2 = _profile_white(math.exp(v[0]), rho, dt, r)
+    return float(v[0]), rho, ll, s2, math.sqrt(var_g) if math.isfinite(var_g) else math.inf
+
+
 def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
                             array_xy: np.ndarray, sigma_rad: float | None, *,
                             correlation_s: float = 0.0, iterations: int = 2,
-                            **kw: object) -> TmaSolution:
+                            white: bool = True, **kw: object) -> TmaSolution:
     """Compact-array TMA with the correlation time estimated from its own residuals.
 
     A first fit (:func:`.compact.solve_compact`) with ``correlation_s``, then ``iterations``
@@ -185,6 +276,10 @@ def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
         τ of the first fit (s); 0: independent errors.
     iterations : int
         Estimate-and-refit passes (≥ 1).
+    white : bool
+        τ̂ of the exponential part of an exponential-plus-white error (eq. C4): the peak
+        picker's own scatter is white; the refit's C is exponential (its σ̂ absorbs the white
+        part).
     **kw
         The other keywords of :func:`.compact.solve_compact`.
 
@@ -200,7 +295,7 @@ def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
     est = None
     for _ in range(max(int(iterations), 1)):
         resid = np.angle(np.exp(1j * (y[ok] - sol.fitted)))
-        est = estimate_correlation_time(t[ok], resid)
+        est = estimate_correlation_time(t[ok], resid, white=white)
         sol = solve_compact(t, y, array_xy, sigma_rad, correlation_s=est.tau_s, **kw)
     sol.tau_s = est.tau_s
     sol.tau_sigma_s = est.tau_sigma_s
