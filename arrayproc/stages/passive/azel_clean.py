@@ -17,7 +17,8 @@ columns [1, B_1, …]), at least ``min_separation`` from every direction kept, b
 component, kept while its power over the noise, ``A_k / P_n``, is at least ``threshold_db``
 and it lies within ``dynamic_db`` of the strongest component. Each kept direction is then
 refined on its own map ``q_k = P − P_n − Σ_{j≠k} A_j B_j`` (the other sources removed; the
-sub-grid peak of :func:`arrayproc.dsp.peaks2d.pick_peaks_2d`), and the powers refitted.
+sub-grid peak of :func:`arrayproc.dsp.peaks2d.pick_peaks_2d`), and the powers refitted;
+twice (:data:`REFINE_PASSES`), the second with the others' refined patterns.
 
 The flat spectrum is an assumption: a coloured source spectrum changes r(u) (the mainlobe
 widens towards the low frequencies), which leaves a residual near a strong source; the
@@ -34,6 +35,9 @@ from scipy.optimize import nnls
 from arrayproc.dsp.peaks2d import pick_peaks_2d
 
 __all__ = ["band_correlation", "AzelPattern", "clean_peaks", "NOISE_FLOOR"]
+
+#: refinement passes of the directions (each with the others' refined patterns removed)
+REFINE_PASSES = 2
 
 #: the fitted noise power's floor, a fraction of the scan's largest power (60 dB down)
 NOISE_FLOOR = 1e-6
@@ -175,9 +179,29 @@ def clean_peaks(power: np.ndarray, pat: AzelPattern, heading: float, az: np.ndar
         dirs.append(cand)
         cols.append(b_new)
         coef = trial
+    out: list[tuple[float, float, float, float, float]] = []
+    for _ in range(REFINE_PASSES):  # each direction on its own map, the others removed
+        if not dirs:
+            break
+        out = _refine(p, pat, heading, az, el, wrap, dirs, coef, cols, cos_min)
+        dirs = [(o[0], o[1]) for o in out]
+        cols = [pat.pattern(a, e, heading) for a, e in dirs]
+        coef = _fit(p, cols)
+    out = [(a, e, float(coef[1 + k]), c, lev) for k, (a, e, _, c, lev) in enumerate(out)]
+    out = [o for o in out if o[2] > 0]
+    out.sort(key=lambda o: -o[2])
+    return out, float(coef[0])
+
+
+def _refine(p: np.ndarray, pat: AzelPattern, heading: float, az: np.ndarray, el: np.ndarray,
+            wrap: bool, dirs: list[tuple[float, float]], coef: np.ndarray,
+            cols: list[np.ndarray], cos_min: float
+            ) -> list[tuple[float, float, float, float, float]]:
+    """Each direction's sub-grid peak on ``q_k = P − P_n − Σ_{j≠k} A_j B_j`` within the
+    search separation of it: (azimuth, elevation, 0, curvature_az, level_db of q_k)."""
     out = []
     n_el, n_az = el.size, az.size
-    for k in range(len(dirs)):  # each direction on its own map, the others removed
+    for k in range(len(dirs)):
         q = p - coef[0] - sum((coef[1 + j] * cols[j] for j in range(len(dirs)) if j != k),
                               np.zeros_like(p))
         floor = max(float(coef[1 + k]) * 1e-3, 1e-300)
@@ -185,13 +209,7 @@ def clean_peaks(power: np.ndarray, pat: AzelPattern, heading: float, az: np.ndar
         qdb[(pat.cos_sep(*dirs[k], heading) < cos_min).reshape(n_el, n_az)] = -np.inf
         pk = pick_peaks_2d(qdb, az, el, -np.inf, 0.0, 1, wrap)
         if pk and all(math.isfinite(v) for v in pk[0]):
-            dirs[k] = (pk[0][0], pk[0][1])
             out.append((pk[0][0], pk[0][1], 0.0, pk[0][3], pk[0][2]))
         else:
             out.append((dirs[k][0], dirs[k][1], 0.0, -1.0, float(np.max(qdb))))
-    if dirs:
-        coef = _fit(p, [pat.pattern(a, e, heading) for a, e in dirs])
-    out = [(a, e, float(coef[1 + k]), c, lev) for k, (a, e, _, c, lev) in enumerate(out)]
-    out = [o for o in out if o[2] > 0]
-    out.sort(key=lambda o: -o[2])
-    return out, float(coef[0])
+    return out
