@@ -33,9 +33,17 @@ share ρ = σ²/s² a second parameter, maximised over (log τ, logit ρ) (a gri
 Nelder-Mead); se(log τ) from the inverse Hessian there (the curvature in log τ alone when ρ̂
 lies on its bound).
 
-The residuals of a fit are not quite the errors: the three fitted parameters absorb the
-slowest components, so τ̂ is biased low when τ is not small against the window (a few per
-cent for τ = T/30; see docs/validation/compact.md for the measured estimates).
+The residuals of a fit are not quite the errors: the fitted parameters absorb the slowest
+components, so τ̂ from them is biased low (measured on the compact TMA: 20 s came back as
+13-15 s over 330 s windows). Given the fit's Jacobian G (N × p) at its solution, the
+restricted (REML, Patterson & Thompson) likelihood of the residuals counts what the fit
+took::
+
+    ℓ_R = −((N − p)/2) (log 2π ŝ² + 1) − ½ log det K − ½ log det(Gᵀ K⁻¹ G),
+    ŝ² = |P⊥ K^{−1/2} r|² / (N − p)                                                    (C5)
+
+(K the unit-variance correlation of (C1) or (C4), K^{−1/2} applied by the Kalman
+innovations of every column, P⊥ the projection off the whitened G), maximised as above.
 
 :func:`solve_compact_estimated` is the paper's procedure: a first fit with the configured
 (or zero) τ, τ̂ from its residuals, a refit with τ̂; the solution carries ``tau_s`` and
@@ -51,6 +59,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .compact import solve_compact
+from .fim import compact_jacobian
 from .result import TmaSolution
 
 __all__ = ["CorrelationEstimate", "profile_loglik", "estimate_correlation_time",
@@ -86,20 +95,24 @@ class CorrelationEstimate:
     white_sigma: float = 0.0
 
 
-def _prepare(times: np.ndarray, residuals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _prepare(times: np.ndarray, residuals: np.ndarray, design: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     t = np.asarray(times, float).reshape(-1)
     r = np.asarray(residuals, float).reshape(-1)
     if t.size != r.size:
         raise ValueError(f"{t.size} times but {r.size} residuals")
+    g = None if design is None else np.asarray(design, float).reshape(t.size, -1)
     ok = np.isfinite(t) & np.isfinite(r)
-    t, r = t[ok], r[ok]
-    order = np.argsort(t, kind="stable")
+    if g is not None:
+        ok &= np.all(np.isfinite(g), axis=1)
+    order = np.flatnonzero(ok)[np.argsort(t[ok], kind="stable")]
     t, r = t[order], r[order]
-    if t.size < 3:
-        raise ValueError(f"the correlation time needs at least 3 residuals, {t.size} given")
+    g = None if g is None else g[order]
+    if t.size < 3 + (0 if g is None else g.shape[1]):
+        raise ValueError(f"the correlation time needs more residuals than {t.size}")
     if np.any(np.diff(t) <= 0):
         raise ValueError("the residuals' times must be distinct")
-    return t, r
+    return t, r, g
 
 
 def _profile(tau: float, dt: np.ndarray, r: np.ndarray) -> tuple[float, float]:
@@ -131,13 +144,14 @@ def profile_loglik(times: np.ndarray, residuals: np.ndarray, tau_s: float) -> fl
     -------
     float
     """
-    t, r = _prepare(times, residuals)
+    t, r, _ = _prepare(times, residuals)
     return _profile(float(tau_s), np.diff(t), r)[0]
 
 
 def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
                               bounds: tuple[float, float] | None = None,
-                              n_grid: int = 48, white: bool = False) -> CorrelationEstimate:
+                              n_grid: int = 48, white: bool = False,
+                              design: np.ndarray | None = None) -> CorrelationEstimate:
     """Maximum-likelihood τ of exponentially correlated residuals (eqs. C1-C3).
 
     Parameters
@@ -153,36 +167,40 @@ def estimate_correlation_time(times: np.ndarray, residuals: np.ndarray,
     white : bool
         Model the residuals as the exponential error plus white noise (eq. C4); τ̂ is then
         that of the exponential part, ``white_sigma`` the white noise's σ̂.
+    design : (N, p) array_like, optional
+        The fit's Jacobian at its solution (the derivatives of the model at the residuals'
+        times): the restricted likelihood (eq. C5) of the residuals, which the p fitted
+        parameters have reduced; None: the residuals taken for the errors.
 
     Returns
     -------
     CorrelationEstimate
     """
-    t, r = _prepare(times, residuals)
+    t, r, design = _prepare(times, residuals, design)
     dt = np.diff(t)
     lo, hi = bounds if bounds is not None else (float(dt.min()) / 4.0,
                                                  20.0 * float(t[-1] - t[0]))
     if not 0 < lo < hi:
         raise ValueError(f"bounds must satisfy 0 < lo < hi, got ({lo}, {hi})")
     if white:
-        g, rho, ll, s2, se_g = _white_fit(dt, r, lo, hi, n_grid)
+        g, rho, ll, s2, se_g = _white_fit(dt, r, lo, hi, n_grid, design)
         at_bound = g - math.log(lo) < 1e-3 or math.log(hi) - g < 1e-3
         tau = math.exp(g)
         return CorrelationEstimate(tau, tau * se_g, math.sqrt(rho * s2), ll, bool(at_bound),
                                    math.sqrt((1.0 - rho) * s2))
     grid = np.linspace(math.log(lo), math.log(hi), n_grid)
-    ll = np.array([_profile(math.exp(g), dt, r)[0] for g in grid])
+    ll = np.array([_loglik(math.exp(g), 1.0, dt, r, design)[0] for g in grid])
     k = int(np.argmax(ll))
     a, b = grid[max(k - 1, 0)], grid[min(k + 1, n_grid - 1)]
-    res = minimize_scalar(lambda g: -_profile(math.exp(g), dt, r)[0], bounds=(a, b),
+    res = minimize_scalar(lambda g: -_loglik(math.exp(g), 1.0, dt, r, design)[0], bounds=(a, b),
                           method="bounded", options={"xatol": 1e-6})
     g = float(res.x) if -res.fun >= ll[k] else float(grid[k])
     g = min(max(g, grid[0]), grid[-1])
-    best, s2 = _profile(math.exp(g), dt, r)
+    best, s2 = _loglik(math.exp(g), 1.0, dt, r, design)
     at_bound = g - grid[0] < 1e-3 or grid[-1] - g < 1e-3
     h = 0.02
-    d2 = (_profile(math.exp(g + h), dt, r)[0] - 2.0 * best
-          + _profile(math.exp(g - h), dt, r)[0]) / (h * h)
+    d2 = (_loglik(math.exp(g + h), 1.0, dt, r, design)[0] - 2.0 * best
+          + _loglik(math.exp(g - h), 1.0, dt, r, design)[0]) / (h * h)
     tau = math.exp(g)
     se = tau / math.sqrt(-d2) if d2 < 0 else math.inf
     return CorrelationEstimate(tau, se, math.sqrt(s2), best, bool(at_bound))
@@ -214,8 +232,52 @@ def _profile_white(tau: float, rho: float, dt: np.ndarray, r: np.ndarray
             s2)
 
 
-def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int
-               ) -> tuple[float, float, float, float, float]:
+def _innovations(tau: float, rho: float, dt: np.ndarray, cols: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised Kalman innovations ν_b/√S_b of the columns ``cols`` (N, m) under the unit
+    correlation ρ exp(−|Δ|/τ) + (1 − ρ) δ (the gains do not depend on the data, so one
+    recursion whitens every column: K^{-1/2} cols), and log S_b (N,)."""
+    phi = np.exp(-dt / tau)
+    q = rho * -np.expm1(-2.0 * dt / tau)
+    w = 1.0 - rho
+    n = cols.shape[0]
+    x = np.zeros(cols.shape[1])
+    pp = rho
+    out = np.empty_like(cols)
+    logs = np.empty(n)
+    for b in range(n):
+        if b:
+            x, pp = phi[b - 1] * x, phi[b - 1] ** 2 * pp + q[b - 1]
+        sb = pp + w
+        nu = cols[b] - x
+        k = pp / sb
+        x, pp = x + k * nu, (1.0 - k) * pp
+        out[b] = nu / math.sqrt(sb)
+        logs[b] = math.log(sb)
+    return out, logs
+
+
+def _loglik(tau: float, rho: float, dt: np.ndarray, r: np.ndarray,
+            design: np.ndarray | None) -> tuple[float, float]:
+    """(ℓ, ŝ²): eq. (C3) (ρ = 1), (C4), or with the fit's Jacobian the restricted
+    likelihood (C5)."""
+    if design is None:
+        return _profile(tau, dt, r) if rho >= 1.0 else _profile_white(tau, rho, dt, r)
+    wc, logs = _innovations(tau, rho, dt, np.column_stack([r, design]))
+    wr, wg = wc[:, 0], wc[:, 1:]
+    coef, *_ = np.linalg.lstsq(wg, wr, rcond=None)
+    e = wr - wg @ coef
+    n, p = wr.size, wg.shape[1]
+    s2 = float(e @ e) / (n - p)
+    if not s2 > 0:
+        return -math.inf, 0.0
+    logdet_g = np.linalg.slogdet(wg.T @ wg)[1]
+    return (-0.5 * (n - p) * (math.log(2.0 * math.pi * s2) + 1.0)
+            - 0.5 * float(np.sum(logs)) - 0.5 * float(logdet_g), s2)
+
+
+def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int,
+               design: np.ndarray | None = None) -> tuple[float, float, float, float, float]:
     """(log τ̂, ρ̂, ℓ_p, ŝ², se(log τ)) of eq. (C4): a grid over log τ and ρ, then Nelder-Mead
     on (log τ, logit ρ), the standard error from the inverse Hessian of ℓ_p there."""
     from scipy.optimize import minimize
@@ -225,7 +287,7 @@ def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int
     def nll(v: np.ndarray) -> float:
         g = min(max(v[0], math.log(lo)), math.log(hi))
         u = min(max(v[1], -u_max), u_max)
-        return -_profile_white(math.exp(g), 1.0 / (1.0 + math.exp(-u)), dt, r)[0]
+        return -_loglik(math.exp(g), 1.0 / (1.0 + math.exp(-u)), dt, r, design)[0]
 
     best = (math.inf, 0.0, 0.0)
     for g in np.linspace(math.log(lo), math.log(hi), max(n_grid // 3, 8)):
@@ -254,14 +316,15 @@ def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int
         except np.linalg.LinAlgError:
             var_g = math.inf
     rho = 1.0 / (1.0 + math.exp(-v[1]))
-    ll, s2 = _profile_white(math.exp(v[0]), rho, dt, r)
+    ll, s2 = _loglik(math.exp(v[0]), rho, dt, r, design)
     return float(v[0]), rho, ll, s2, math.sqrt(var_g) if math.isfinite(var_g) else math.inf
 
 
 def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
                             array_xy: np.ndarray, sigma_rad: float | None, *,
                             correlation_s: float = 0.0, iterations: int = 2,
-                            white: bool = True, **kw: object) -> TmaSolution:
+                            white: bool = True, restricted: bool = True,
+                            **kw: object) -> TmaSolution:
     """Compact-array TMA with the correlation time estimated from its own residuals.
 
     A first fit (:func:`.compact.solve_compact`) with ``correlation_s``, then ``iterations``
@@ -280,6 +343,8 @@ def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
         τ̂ of the exponential part of an exponential-plus-white error (eq. C4): the peak
         picker's own scatter is white; the refit's C is exponential (its σ̂ absorbs the white
         part).
+    restricted : bool
+        τ̂ from the restricted likelihood (eq. C5) with the fit's Jacobian in (x0, y0, γ).
     **kw
         The other keywords of :func:`.compact.solve_compact`.
 
@@ -295,7 +360,13 @@ def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,
     est = None
     for _ in range(max(int(iterations), 1)):
         resid = np.angle(np.exp(1j * (y[ok] - sol.fitted)))
-        est = estimate_correlation_time(t[ok], resid, white=white)
+        design = None
+        if restricted:
+            q = np.array([sol.state[0], sol.state[1],
+                          math.atan2(sol.state[2], sol.state[3])])
+            design = compact_jacobian(q, float(np.hypot(*sol.state[2:4])), t[ok] - sol.t0,
+                                      sol.observer)[:, :3]
+        est = estimate_correlation_time(t[ok], resid, white=white, design=design)
         sol = solve_compact(t, y, array_xy, sigma_rad, correlation_s=est.tau_s, **kw)
     sol.tau_s = est.tau_s
     sol.tau_sigma_s = est.tau_sigma_s
