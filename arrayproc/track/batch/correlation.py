@@ -46,8 +46,8 @@ took::
 innovations of every column, P⊥ the projection off the whitened G), maximised as above.
 
 :func:`solve_compact_estimated` is the paper's procedure: a first fit with the configured
-(or zero) τ, τ̂ from its residuals, a refit with τ̂; the solution carries ``tau_s`` and
-``tau_sigma_s``.
+(or zero) τ, τ̂ from its residuals (by default the restricted likelihood (C5) of the model
+(C4)), a refit with τ̂, twice; the solution carries ``tau_s`` and ``tau_sigma_s``.
 """
 
 from __future__ import annotations
