@@ -296,6 +296,11 @@ _KINDS = [
         "f0_hz": _c("Hz", "rest frequency of the tonal (bearings_frequency)", False),
         "sigma_f0_hz": _c("Hz", "CRLB standard deviation of f0_hz", False),
         "n_used": _c("", "measurement rows used", False, dtype="i8"),
+        # compact: the bearing errors' exponential correlation time
+        "tau_s": _c("s", "compact: correlation time of the bearing errors used (configured, "
+                    "or estimated from the residuals)", False),
+        "tau_sigma_s": _c("s", "compact: standard error of an estimated tau_s (NaN: "
+                          "configured)", False),
     }),
 ]
 

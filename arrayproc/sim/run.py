@@ -30,9 +30,11 @@ from arrayproc.sim.noise import ambient_noise
 from arrayproc.sim.propagation import LossLaw, PoseTrack, grid_nodes, retarded_time
 from arrayproc.sim.scenario import Scenario, load_scenario
 from arrayproc.sim.sources import SourceSignal
+from arrayproc.sim.yaw import GaussMarkovYaw
 
 KEY_POSITION_ERROR = 41
 KEY_LATERAL = 42
+KEY_YAW = 43
 
 
 class Simulator:
@@ -61,6 +63,9 @@ class Simulator:
             self.lateral_offsets = rng.normal(0.0, arr.lateral_std, self.n_snap)
         else:
             self.lateral_offsets = np.zeros(self.n_snap)
+        self.yaw = (GaussMarkovYaw(arr.yaw_std, arr.yaw_time, scen.duration,
+                                   np.random.SeedSequence(seed, spawn_key=(KEY_YAW,)))
+                    if arr.yaw_std > 0 else None)
         self.extent = float(np.max(np.linalg.norm(self.body, axis=1))
                             + np.max(np.abs(self.lateral_offsets)))
         self.own = TrackMover(scen.ownship, arr.depth)
@@ -135,6 +140,8 @@ class Simulator:
     def pose(self, t: np.ndarray) -> PoseTrack:
         """The array's pose at times t (s)."""
         p, _, _, crs, _ = self.own.evaluate(t)
+        if self.yaw is not None:  # the heading jitter /nav does not see
+            crs = crs + self.yaw(t)
         h = np.deg2rad(crs)
         idx = np.clip((t / self.s.array.lateral_snapshot).astype(np.int64), 0, self.n_snap - 1)
         lat = np.ascontiguousarray(self.lateral_offsets[idx])
@@ -275,6 +282,10 @@ class Simulator:
         attrs["array"] = {"shape": arr.shape, "position_error_std": arr.position_error_std,
                           "lateral_std": arr.lateral_std,
                           "lateral_snapshot": arr.lateral_snapshot, "depth": arr.depth}
+        if self.yaw is not None:  # written only with a jitter: the other files are unchanged
+            groups["array"]["yaw_time"] = self.yaw.time
+            groups["array"]["yaw_deg"] = self.yaw.values
+            attrs["array"].update(yaw_std=arr.yaw_std, yaw_time=arr.yaw_time)
         if self.active is not None:
             act, act_attrs = self.active.truth()
             groups.update(act)

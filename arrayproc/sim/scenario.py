@@ -120,6 +120,8 @@ class ArraySpec:
     lateral_std: float = 0.0
     lateral_snapshot: float = 1.0
     shape: str = "rigid"  # "rigid" | "water_pulled" (elements thread the tow point's path)
+    yaw_std: float = 0.0  # deg, Gauss-Markov heading jitter (arrayproc.sim.yaw)
+    yaw_time: float = 20.0  # s, its correlation time
 
 
 @dataclass
@@ -504,8 +506,10 @@ def _array(root: Section) -> tuple[ArraySpec, Section]:
         pos = tetrahedron(need["side"])
     else:
         pos = np.asarray(need["positions"], float)
+    if at["yaw_std"] > 0 and at["shape"] == "water_pulled":
+        raise at.err("yaw_std", "a heading jitter needs a rigid array (shape = 'rigid')")
     array = ArraySpec(pos, at["depth"], at["position_error_std"], at["lateral_std"],
-                      at["lateral_snapshot"], at["shape"])
+                      at["lateral_snapshot"], at["shape"], at["yaw_std"], at["yaw_time"])
     return array, at
 
 

@@ -86,6 +86,15 @@ ARRAY = Schema({
                          unit="m"),
     "lateral_snapshot": Param("float", 1.0, "Snapshot length of the lateral motion.",
                               check=positive, unit="s"),
+    "yaw_std": Param("float", 0.0, "Heading jitter of a rigid array (a bed-mounted frame "
+                     "rocking, a buoy's suspension): the true heading is the ownship's plus a "
+                     "first-order Gauss-Markov yaw ψ(t) of this std, E ψ(t)ψ(t+Δ) = "
+                     "σ² exp(−|Δ|/yaw_time), which `/nav` does not see, so the bearings' "
+                     "errors are exponentially correlated; the yaw is in `/truth/array/yaw_deg`"
+                     " (0: none; not with shape = water_pulled).", check=non_negative,
+                     unit="deg"),
+    "yaw_time": Param("float", 20.0, "Correlation time of the yaw.", check=positive,
+                      unit="s"),
     "shape": Param("str", "rigid", "`water_pulled`: each element follows the path the "
                    "reference point took (threading model), so the array bends in turns; "
                    "needs an ownship moving on every leg; the shape is in "

@@ -64,7 +64,7 @@ from arrayproc.stages.passive._common import (
     received_level_offset_db,
     snapshot_times,
 )
-from arrayproc.stages.passive.bearings_azel import AZEL_COLUMNS, azel_rows
+from arrayproc.stages.passive.bearings_azel import AZEL_COLUMNS, azel_rows, grid_axes
 
 COLUMNS = ("time", "cone_deg", "bearing_port_deg", "bearing_stbd_deg", "level_db", "snr_db",
            "freq_lo", "freq_hi", "spl_db")
@@ -100,6 +100,11 @@ class Bearings(Stage):
                                  "its mirror beam is taken as resolved to its side, dB",
                                  check=positive, unit="dB"),
         "max_peaks": Param("int", 8, "peaks per snapshot (per line)", check=positive),
+        "clean": Param("bool", False, "azimuth x elevation beams: the peaks are the components "
+                       "of a CLEAN of the scan (sources below a stronger one's sidelobes; "
+                       "threshold_db over the fitted noise power)"),
+        "clean_dynamic_db": Param("float", 20.0, "clean: components more than this below the "
+                                  "strongest are dropped, dB", check=positive, unit="dB"),
         "max_lines": Param("int", 16, "lines per snapshot", check=positive),
         "tpsw_window": Param("int", 32, "TPSW half-window, bins", check=positive, unit="bins"),
         "tpsw_gap": Param("int", 3, "TPSW half-gap, bins", unit="bins"),
@@ -228,11 +233,17 @@ class Bearings(Stage):
                                                  self.ref)**2)
         off = received_level_offset_db(b, broadband=True)
         rows: dict[str, list] = {k: [] for k in COLUMNS + AZEL_COLUMNS}
+        pattern = None
+        if self.clean:
+            from arrayproc.stages.passive.azel_clean import AzelPattern
+            az, el, _ = grid_axes(b.beams)
+            pattern = AzelPattern(b.positions, self.ctx.sound_speed, az, el,
+                                  f_c - 0.5 * width, f_c + 0.5 * width)
         for s in range(b.data.shape[0]):
             p = b.data[s].sum(axis=0, dtype=np.float64)  # (D,): the one band cell
             level = 10 * np.log10(np.maximum(p, 1e-300)) - lref
             azel_rows(self, level, b.beams, times[s], heads[s], f_c - 0.5 * width,
-                      f_c + 0.5 * width, off, rows)
+                      f_c + 0.5 * width, off, rows, pattern)
         if out is not None and rows["time"]:
             out.append(**{k: np.asarray(v, float) for k, v in rows.items()})
         return b

@@ -68,6 +68,9 @@ class TmaSolution:
         Unweighted sum of squared residuals (rad² or s²), NaN when not computed.
     correlation : float
         Within-snapshot correlation of the delays used (``delays``; NaN otherwise).
+    tau_s, tau_sigma_s : float
+        ``compact``: the bearing errors' correlation time used (s) and, when it was estimated
+        from the residuals (:mod:`.correlation`), its standard error (NaN otherwise).
     mirror : TmaSolution or None
         A line array's mirror solution (both sides flipped; :func:`.bo_tma.solve_cone`).
     """
@@ -89,6 +92,8 @@ class TmaSolution:
     fitted: np.ndarray = field(default_factory=lambda: np.zeros(0))
     rss: float = float("nan")
     correlation: float = float("nan")
+    tau_s: float = float("nan")
+    tau_sigma_s: float = float("nan")
     mirror: TmaSolution | None = None
 
     @property

@@ -36,6 +36,8 @@ Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (e
     speed_mps = 7.3            # compact: assumed speed (required)
     sigma_speed_mps = 1.0      # compact: speed prior σ in the bound (default 0: known)
     correlation_s = 0.0        # compact: exponential correlation time of the bearing errors
+    estimate_correlation = false  # compact: τ estimated from a first fit's residuals, refit
+                               # (arrayproc.track.batch.correlation); columns tau_s, tau_sigma_s
     n_grid = 200               # compact: grid nodes per axis
     n_headings = 72            # compact: headings over 360°
     array_motion = true        # bearings/delays: correct for the array's motion (below)
@@ -98,6 +100,7 @@ from arrayproc.io.text import as_text
 from .bf_tma import solve_bearings_frequency
 from .bo_tma import solve_line_bearings
 from .compact import solve_compact
+from .correlation import solve_compact_estimated
 from .motion import axial_speed, nav_velocity, static_cone
 from .result import TmaSolution
 from .td_tma import solve_delays
@@ -153,7 +156,10 @@ PARAMS = Schema({
     "outlier_k": Param("float", 4.0, "outlier threshold, σ", check=positive),
     "speed_mps": Param("float", None, "compact: assumed speed, m/s", check=positive),
     "sigma_speed_mps": Param("float", 0.0, "compact: speed prior σ, m/s", check=_non_negative),
-    "correlation_s": Param("float", 0.0, "compact: correlation time, s", check=_non_negative),
+    "correlation_s": Param("float", 0.0, "compact: correlation time, s (with "
+                           "estimate_correlation: that of the first fit)", check=_non_negative),
+    "estimate_correlation": Param("bool", False, "compact: estimate the correlation time "
+                                  "from the residuals of a first fit and refit with it"),
     "n_grid": Param("int", 200, "compact: grid nodes per axis", check=positive),
     "n_headings": Param("int", 72, "compact: headings", check=positive),
     "popsize": Param("int", 20, "differential-evolution population factor", check=positive),
@@ -400,11 +406,15 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
         else:
             raise ConfigError("tma.side must be 'port' or 'starboard' for method = 'compact' "
                               "on a line array's bearings (their port and starboard differ)")
-        return solve_compact(ts, y, obs.mean(0), sig, speed_mps=cfg["speed_mps"],
-                             sigma_speed_mps=cfg["sigma_speed_mps"],
-                             correlation_s=cfg["correlation_s"], t0=w0, t1=w1,
-                             max_range_m=cfg["max_range_m"], n_grid=cfg["n_grid"],
-                             n_headings=cfg["n_headings"])
+        kw = dict(speed_mps=cfg["speed_mps"], sigma_speed_mps=cfg["sigma_speed_mps"],
+                  correlation_s=cfg["correlation_s"], t0=w0, t1=w1,
+                  max_range_m=cfg["max_range_m"], n_grid=cfg["n_grid"],
+                  n_headings=cfg["n_headings"])
+        if cfg["estimate_correlation"]:
+            return solve_compact_estimated(ts, y, obs.mean(0), sig, **kw)
+        sol = solve_compact(ts, y, obs.mean(0), sig, **kw)
+        sol.tau_s = cfg["correlation_s"]
+        return sol
     if cfg["method"] == "bearings_frequency":
         return _solve_bf(meas, sel, ts, poses, obs, rec, cfg, w0, w1)
     kw = dict(min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
@@ -533,6 +543,9 @@ def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
         range_sigma_m=np.array([s.range_sigma for s in sols]),
         cost_mirror=np.array([s.cost_other for s in sols]),
         preferred=np.array([id(s) not in mirrors for s in sols], dtype=np.int8))
+    tau = np.array([s.tau_s for s in sols])
+    if np.any(np.isfinite(tau)):  # compact solutions
+        cols.update(tau_s=tau, tau_sigma_s=np.array([s.tau_sigma_s for s in sols]))
     if track_ids is not None:
         cols.update(track_id=np.asarray(track_ids, np.int64), f0_hz=f0, sigma_f0_hz=sf0,
                     n_used=np.array([s.n_used for s in sols], np.int64))

@@ -109,7 +109,10 @@ def _bearings(prod: dict, products_path: str, cfg: dict[str, Any], tma_cfg: dict
         lo, hi = tma_cfg["cone_gate"]
         ok &= (b["cone_deg"] >= lo) & (b["cone_deg"] <= hi)
     idx = np.flatnonzero(ok)
-    scans = bearing_scans(b["time"][idx], b["cone_deg"][idx],
+    # a volumetric array's rows (azimuth_deg, port = starboard) merge on their azimuths: two
+    # directions with one cone angle about the body x axis are two measurements
+    key = np.asarray(g["azimuth_deg"], float) if "azimuth_deg" in g else b["cone_deg"]
+    scans = bearing_scans(b["time"][idx], key[idx],
                           np.where(np.isfinite(score[idx]), score[idx], -np.inf),
                           float(cfg["bearing"]["merge_deg"]))
     scans = [(t, np.stack([b["cone_deg"][idx[r]], b["bearing_port_deg"][idx[r]],
