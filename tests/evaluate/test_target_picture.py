@@ -26,7 +26,7 @@ XFAIL_HELD = ("6 of 11 eligible sources held < 80 %: towship_masking abeam 40 %,
               "(tracks fragment in the turns; tonals under the 12 dB line threshold)")
 XFAIL_FALSE = "long_four has 3 false confirmed tracks (the others 0 or 1)"
 XFAIL_SIGMA = ("4 of 11 eligible sources beyond 3σ: crossing far 7.83σ, long_four coaster "
-               "inf (d² beyond float range), fisher 6.33σ, tanker inf")
+               "239σ, fisher 6.33σ, tanker 2439σ")
 XFAIL_RANGE = ("5 of 11 eligible sources beyond 25 %: towship_masking abeam +315 %, crossing "
                "far +222 %, long_four coaster −32 %, fisher +117 %, tanker +8828 %")
 
