@@ -17,7 +17,8 @@ the recording's ``/truth``:
 - **TMA**: the preferred solution of its principal track against the true state at the
   solution's ``t0``: the Mahalanobis distance d² of (x, y, vx, vy) against that block of the
   CRLB, given as ``sigma``, the 1-D Gaussian deviation with the same tail probability
-  (``P(χ²₄ > d²) = P(|z| > sigma)``, so "within 3σ" is the 99.73 % region of the 4-D bound),
+  (``P(χ²₄ > d²) = P(|z| > sigma)``, so "within 3σ" is the 99.73 % region of the 4-D bound;
+  far in the tail by its asymptote),
   and the range error (% of the true range from the ownship at ``t0``);
 - ``line_cone_deg``: the median |cone error| of the line contacts that match one of the
   source's tonals (received frequency within :data:`LINE_MATCH_HZ`).
@@ -37,7 +38,7 @@ from typing import Any
 
 import h5py
 import numpy as np
-from scipy.special import ndtri_exp
+from scipy.special import gammaln, ndtri_exp
 from scipy.stats import chi2
 
 from arrayproc.evaluate.held import held_last_two_thirds
@@ -190,8 +191,19 @@ def line_cone_errors(rec_path: str, prod_path: str) -> dict[str, dict[str, float
 
 
 def _sigma(d2: float, dim: int) -> float:
-    """1-D Gaussian deviation with the tail probability of χ²_dim at d²."""
-    return float(-ndtri_exp(chi2.logsf(d2, dim) - np.log(2.0)))
+    """1-D Gaussian deviation with the tail probability of χ²_dim at d². Far in the tail,
+    where ``chi2.logsf`` or ``ndtri_exp`` overflow, their asymptotes: ln P(χ²_k > x) ≈
+    −x/2 + (k/2 − 1)·ln(x/2) − ln Γ(k/2), and for ln P(|z| > σ) = y,
+    σ² ≈ u − ln u − ln 2π with u = −2y (Mills ratio, first order)."""
+    ls = float(chi2.logsf(d2, dim))
+    if not np.isfinite(ls):
+        ls = -d2 / 2.0 + (dim / 2.0 - 1.0) * np.log(d2 / 2.0) - float(gammaln(dim / 2.0))
+    y = ls - np.log(2.0)
+    z = float(-ndtri_exp(y))
+    if np.isfinite(z):
+        return z
+    u = -2.0 * y
+    return float(np.sqrt(u - np.log(u) - np.log(2.0 * np.pi)))
 
 
 def tma_scores(rec_path: str, tma_path: str | None, track_ids: dict[str, int]

@@ -27,6 +27,9 @@
 - :mod:`.realism` — multipath, reverberation and water-pulled-array set-ups with their closed
   forms (docs/validation/realism.md).
 - :mod:`.follow` — the chain of the followed-recording runs.
+- :mod:`.target_picture` — five towed-array scenarios of the passive target picture run end
+  to end (docs/validation/target_picture.md), scored by
+  :mod:`arrayproc.evaluate.target_picture`.
 
 The SPL names are importable from here as well.
 """
