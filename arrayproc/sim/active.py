@@ -20,6 +20,8 @@ import numpy as np
 
 from arrayproc.dsp.fracdelay import HALF_WIDTH, default_table
 from arrayproc.sim._propagate_kernels import echo_accumulate, echo_accumulate_serial
+from arrayproc.sim.bellhop_echo import BellhopEchoes
+from arrayproc.sim.bellhop_paths import FamilyCache
 from arrayproc.sim.motion import BodyOffsetMover, DriftMover, FixedMover, TrackMover
 from arrayproc.sim.multipath import ImageMover, images, rough_exponent
 from arrayproc.sim.propagation import LossLaw, PoseTrack, forward_time, grid_nodes, retarded_time
@@ -102,7 +104,8 @@ class ActiveSim:
     def __init__(self, spec: ActiveSpec, own: TrackMover, loss: LossLaw, c: float, fs: float,
                  fs_src: float, duration: float, seed: int, array_extent: float,
                  source_movers: dict[str, TrackMover],
-                 multipath: MultipathSpec | None = None) -> None:
+                 multipath: MultipathSpec | None = None,
+                 bellhop: FamilyCache | None = None) -> None:
         self.spec = spec
         self.multipath = multipath
         imgs = images(multipath)
@@ -114,6 +117,10 @@ class ActiveSim:
         self.fs = float(fs)
         self.fs_src = float(fs_src)
         self.projector = BodyOffsetMover(own, spec.offset)
+        #: echo paths over BELLHOP family pairs (multipath = "bellhop"), else image pairs
+        self.bellhop = None if bellhop is None else BellhopEchoes(
+            bellhop, float(own.depth), float(self.projector.state3(np.zeros(1))[0][0, 2]),
+            spec.waveforms, fs_src)
         #: peak amplitude at 1 m of each waveform, from its source level
         self.amps = {n: tonal_amplitude(lv) for n, lv in spec.levels.items()}
         self.amp = self.amps[spec.schedule[0]]
@@ -182,6 +189,8 @@ class ActiveSim:
             self.windows = {k: np.zeros(0) for k in rows}
             return
         pad = extent / c + (HALF_WIDTH + 3) / self.fs_src + 2.0 / self.fs
+        if self.bellhop is not None:
+            pad += self.bellhop.pad
         sl = np.array([self.spec.levels[n] for n in self.ping_names])
         static: dict[float, list[int]] = {}  # fixed scatterers by depth: one batch each
         for j, sc in enumerate(self.scatterers):
@@ -217,7 +226,11 @@ class ActiveSim:
             tr = forward_time(xt, ts, self.own, c)
             arr.append((ts, tr))
         (ts, tr), (_, tr_end) = arr
-        tr_first, tr_last = self._path_span(mover, tp, T, tr, tr_end)
+        if self.bellhop is not None:
+            tr_first, tr_last = self.bellhop.span(self.projector, self.own, mover, depth, tp,
+                                                  T, tr, tr_end)
+        else:
+            tr_first, tr_last = self._path_span(mover, tp, T, tr, tr_end)
         pp, pv, _ = self.projector.state3(tp)
         tp3, tv, _ = mover.state3(ts)
         rp, rv, _ = self.own.state3(tr)
@@ -329,6 +342,12 @@ class ActiveSim:
             name = self.ping_names[k]
             pw = pose.window(i0, i1)
             geo = self._lambert(sc, tp, float(w["time"][i])) if sc.lambert else 1.0
+            if self.bellhop is not None:
+                self.bellhop.render(out, i0, t[i0:i1], k0 + i0, self.fs, pw, body,
+                                    self.projector, self.own, sc, tp, name,
+                                    float(self.ping_duration[k]), self.c,
+                                    geo * self.amps[name] * 10 ** (sc.ts_db / 20.0))
+                continue
             for ir, it in self.path_pairs:
                 self._render_path(out, k0, i0, i1, t[i0:i1], pw, body, sc, tp, name, ir, it,
                                   geo)

@@ -17,7 +17,8 @@ from arrayproc.errors import ConfigError
 from arrayproc.io.recording import RecordingWriter
 from arrayproc.sim._propagate_kernels import oneway_accumulate, table_accumulate
 from arrayproc.sim.active import ActiveSim, PingTrain
-from arrayproc.sim.bellhop_paths import FamilyPaths, hilbert_fir, quadrature, reference_delay
+from arrayproc.sim.bellhop_echo import scatterer_range
+from arrayproc.sim.bellhop_paths import FamilyCache, hilbert_fir, quadrature, reference_delay
 from arrayproc.sim.motion import BodyOffsetMover, TrackMover
 from arrayproc.sim.multipath import (
     ImageMover,
@@ -87,12 +88,17 @@ class Simulator:
                 movers[sp.name] = mover
             self.sources.append((mover, SourceSignal(sp, mover, self.fs_src, seed, i), sp.depth))
         self.bellhop = None  # source depth -> BELLHOP ray families
+        self.bellhop_runs = None  # BELLHOP runs per source depth (passive and echoes)
         if scen.propagation.bellhop is not None:
             bh = scen.propagation.bellhop
             if bh.max_range is None:  # every source's farthest horizontal range, with margin
                 bh.max_range = self._max_range()
                 bh.range_step = max(bh.range_step, bh.max_range / 20000)
-            self.bellhop = {float(d): FamilyPaths(bh, self.c, float(d), float(arr.depth))
+            rcv = [float(arr.depth)]
+            if scen.active is not None:  # the projector's depth: the echoes' transmit legs
+                rcv.append(float(arr.depth + scen.active.offset[2]))
+            self.bellhop_runs = FamilyCache(bh, self.c, rcv)
+            self.bellhop = {float(d): self.bellhop_runs.get(float(d), float(arr.depth))
                             for d in sorted({float(x[2]) for x in self.sources})}
             self._hilbert = hilbert_fir()
         self.noise = (ambient_noise(scen.noise, self.fs, self.n_channels, seed)
@@ -101,10 +107,12 @@ class Simulator:
         if scen.active is not None:
             self.active = ActiveSim(scen.active, self.own, self.loss, self.c, self.fs,
                                     self.fs_src, scen.duration, seed, self.extent, movers,
-                                    scen.propagation.multipath)
+                                    scen.propagation.multipath, self.bellhop_runs)
             if scen.active.direct:
                 pt = PingTrain(self.active)
                 self.sources.append((pt.mover, pt, pt.depth))
+                if self.bellhop is not None:
+                    self.bellhop[pt.depth] = self.bellhop_runs.get(pt.depth, float(arr.depth))
         self._check()
 
     def _max_range(self) -> float:
@@ -114,6 +122,9 @@ class Simulator:
         ref = self.own.state3(t)[0][:, :2]
         far = max((float(np.max(np.hypot(*(m.state3(t)[0][:, :2] - ref).T)))
                    for m, _, _ in self.sources), default=100.0)
+        if self.s.active is not None:  # every scatterer's, for the echoes
+            far = max(far, scatterer_range(self.s.active, self.s.sources, t, ref,
+                                           self.s.duration))
         return 1.2 * far + self.extent + 100.0
 
     def _mean_own_speed(self) -> float:

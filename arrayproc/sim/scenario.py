@@ -395,13 +395,15 @@ def _bellhop(pt: Section, loss: str, c: float) -> BellhopSpec:
     return spec
 
 
-def _bellhop_freq(sources: list[SourceSpec]) -> float:
+def _bellhop_freq(sources: list[SourceSpec], active: ActiveSpec | None = None) -> float:
     """Frequency of the ray trace when not given: the loudest tonal's, else the centre of the
-    first broadband band."""
+    first broadband band, else the centre of the first scheduled ping waveform's band."""
     tonals = [t for sp in sources for t in sp.tonals]
     if tonals:
         return float(max(tonals, key=lambda t: t.level_db).freq)
     bands = [sp.broadband.band for sp in sources if sp.broadband is not None]
+    if not bands and active is not None:
+        bands = [active.waveforms[active.schedule[0]].band]
     return float(0.5 * (bands[0][0] + bands[0][1])) if bands else 50.0
 
 
@@ -453,13 +455,10 @@ def parse_scenario(data: dict, file: str = "<scenario>",
     if prop.multipath is not None:
         _check_waveguide(prop.multipath, array, sources, active, file)
     if prop.bellhop is not None:
-        if active is not None:
-            raise ConfigError(f"{file}: [propagation] multipath = \"bellhop\" is for passive "
-                              "sources only (active echoes: use the image-source table)")
         _check_waveguide(MultipathSpec(bottom_depth=prop.bellhop.depth), array, sources,
-                         None, file)
+                         active, file)
         if prop.bellhop.freq is None:
-            prop.bellhop.freq = _bellhop_freq(sources)
+            prop.bellhop.freq = _bellhop_freq(sources, active)
     _check_drift(sources, duration, fs, file)
     return Scenario(file, fs, duration, c, seed, start_time, chunk, truth_interval,
                     nav_interval, array, own, own_static, sources, prop, noise, active)

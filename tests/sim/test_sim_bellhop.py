@@ -64,8 +64,7 @@ def test_bellhop_keys_are_checked():
         d = scenario([100.0])
         d["propagation"]["bellhop"] = {"ssp": [[0.0, 1500.0], [100.0, 1490.0]]}
         parse_scenario(d)
-    with pytest.raises(ConfigError, match="passive sources only"):
-        d = scenario([100.0])
-        d["active"] = {"waveform": "cw", "fc": 500.0, "duration": 0.1, "level_db": 200.0,
-                       "interval": 10.0}
-        parse_scenario(d)
+    d = scenario([100.0])  # active echoes are accepted in the BELLHOP mode
+    d["active"] = {"waveform": "cw", "fc": 500.0, "duration": 0.1, "level_db": 200.0,
+                   "interval": 10.0}
+    assert parse_scenario(d).propagation.bellhop is not None
