@@ -85,10 +85,8 @@ def run_scenario(name: str, out_dir: str, duration: float | None = None,
         ``paths`` (scenario, recording, products, tracks, tma; tma None when no track was
         solved), ``seconds`` per step, ``warnings`` (messages).
     """
-    from arrayproc.app.process import process
-    from arrayproc.app.recordings import simulate
-    from arrayproc.app.tracking import tma, track
     from arrayproc.errors import ArrayprocError
+    from arrayproc.evaluate.pipeline import process, simulate, tma, track
 
     os.makedirs(out_dir, exist_ok=True)
     p = {k: os.path.join(out_dir, f"{name}_{k}.h5") for k in ("rec", "prod", "tracks", "tma")}

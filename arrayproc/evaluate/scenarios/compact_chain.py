@@ -118,11 +118,12 @@ def _shipped(key: str) -> str:
 
 
 def run_chain(workdir: str | os.PathLike, scenario_text: str) -> dict[str, str]:
-    """``simulate → process → track → tma`` through the package's command functions and the
-    shipped files (:data:`SHIPPED`); returns the paths written."""
+    """``simulate → process → track → tma`` through the library functions the commands call
+    (:mod:`arrayproc.evaluate.pipeline`) and the shipped files (:data:`SHIPPED`); returns the
+    paths written."""
     import warnings
 
-    from arrayproc.app import commands
+    from arrayproc.evaluate import pipeline as commands
 
     d = Path(workdir)
     d.mkdir(parents=True, exist_ok=True)
