@@ -165,9 +165,17 @@ def ensure_numba_cache(warn_fn=warn, environ: dict | None = None) -> str | None:
 
 # -- signals and warnings -----------------------------------------------------------------------
 def _on_signal(signum: int, frame: object) -> None:
-    from arrayproc.io.atomic import graceful, request_stop, set_graceful, stop_requested
+    from arrayproc.io.atomic import (
+        graceful,
+        in_file_driver,
+        request_stop,
+        set_graceful,
+        stop_requested,
+    )
     first = stop_requested() is None
     request_stop(signum)
+    if in_file_driver(frame):  # inside HDF5's write callback: the writer's next check stops
+        return
     if graceful():  # process --follow: the first signal ends the stream, a second stops now
         if first:
             return
@@ -192,8 +200,8 @@ def _quiet_unraisable(hook):
     propagate it (a weakref callback, a ``__del__``): the stop is already recorded and every
     writer checks it, so printing its traceback would only break the one-line rule."""
     def quiet(u) -> None:
-        if isinstance(u.exc_value, (Interrupted, KeyboardInterrupt)):
-            return
+        if isinstance(u.exc_value, KeyboardInterrupt) or _stop_cause(u.exc_value) is not None:
+            return  # also a C callback's SystemError raised from the stop (h5py's file driver)
         hook(u)
     return quiet
 

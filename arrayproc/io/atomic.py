@@ -70,6 +70,31 @@ def clear_stop() -> None:
     clear_errors()
 
 
+def in_file_driver(frame: Any) -> bool:
+    """Whether ``frame`` (a signal handler's) runs inside a :class:`GuardedFile` method, that
+    is, in HDF5's C file driver calling back into Python. An exception raised there cannot
+    unwind through HDF5: h5py turns it into a ``SystemError`` with a traceback and may leave
+    its objects half-freed, so a stop there is only recorded; :func:`check_stop`, called
+    by every writer between writes and before :func:`commit`, raises it next."""
+    codes = _driver_codes()
+    depth = 0
+    while frame is not None and depth < 8:
+        if frame.f_code in codes:
+            return True
+        frame, depth = frame.f_back, depth + 1
+    return False
+
+
+def _driver_codes() -> frozenset:
+    if not _DRIVER_CODES:
+        _DRIVER_CODES.append(frozenset(
+            f.__code__ for f in vars(GuardedFile).values() if hasattr(f, "__code__")))
+    return _DRIVER_CODES[0]
+
+
+_DRIVER_CODES: list[frozenset] = []
+
+
 def check_stop() -> None:
     """Raise :class:`Interrupted` when a stop was requested (not during a graceful run), and
     :class:`~arrayproc.errors.OutputWriteError` when a live output's write failed
