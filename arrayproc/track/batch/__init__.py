@@ -10,8 +10,9 @@ compact-array paper eqs. (1)-(5)).
 
 from .bo_tma import solve_bearings, solve_line_bearings
 from .compact import solve_compact
+from .cross_fix import solve_cross_fix
 from .result import TmaSolution
 from .td_tma import solve_delays
 
 __all__ = ["TmaSolution", "solve_bearings", "solve_line_bearings", "solve_delays",
-           "solve_compact"]
+           "solve_compact", "solve_cross_fix"]
