@@ -100,6 +100,7 @@ _API = {
     "solve_line_bearings": "arrayproc.track.batch",
     "solve_delays": "arrayproc.track.batch",
     "solve_compact": "arrayproc.track.batch",
+    "solve_cross_fix": "arrayproc.track.batch",
     "TmaSolution": "arrayproc.track.batch",
     "run_tma": "arrayproc.track.batch.run",
     # plots: file writing, and drawing on a matplotlib Axes
