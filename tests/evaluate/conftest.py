@@ -8,7 +8,10 @@ import pytest
 @pytest.fixture(scope="module")
 def clients():
     pytest.importorskip("distributed")
+    import dask
+
     from arrayproc.app.batch import start_client
+    before = dask.config.get("scheduler", None)
     out = {}
     for n in (1, 2):
         out[n] = start_client(workers=n, threads=1)
@@ -19,3 +22,4 @@ def clients():
     for c, cluster in reversed(list(out.values())):
         c.close()
         cluster.close()
+    dask.config.set(scheduler=before)  # older distributed releases leave their own default
