@@ -39,21 +39,40 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
 
 
-@pytest.fixture(autouse=True, scope="module")
-def dask_scheduler_unchanged(request):
-    """A module that leaves a different default dask scheduler behind (an unclosed
-    ``distributed.Client``) fails here, not in whichever later test computes lazily."""
+def _dask_scheduler():
     import sys
+    dask = sys.modules.get("dask")
+    return dask.config.get("scheduler", None) if dask is not None else None
 
-    def scheduler():
-        dask = sys.modules.get("dask")
-        return dask.config.get("scheduler", None) if dask is not None else None
 
-    before = scheduler()
-    yield
-    after = scheduler()
+_SCHEDULER_AT_MODULE_START: dict[str, object] = {}
+
+
+def _module_of(item) -> str:
+    return item.nodeid.split("::")[0]
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    """Note dask's default scheduler before a module's first test sets anything up."""
+    _SCHEDULER_AT_MODULE_START.setdefault(_module_of(item), _dask_scheduler())
+    return (yield)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    """A module that leaves a different default dask scheduler behind (an unclosed
+    ``distributed.Client``) fails at its last test's teardown, once every one of its fixtures
+    is gone, not in whichever later test computes lazily. A hook rather than an autouse
+    fixture: some pytest releases tear module fixtures down out of order."""
+    result = yield
+    name = _module_of(item)
+    if nextitem is not None and _module_of(nextitem) == name:
+        return
+    before, after = _SCHEDULER_AT_MODULE_START.pop(name, None), _dask_scheduler()
     if after != before:
         import dask
         dask.config.set(scheduler=before)
-        pytest.fail(f"{request.module.__name__} left dask's default scheduler at {after!r} "
-                    f"(was {before!r})", pytrace=False)
+        pytest.fail(f"{name} left dask's default scheduler at {after!r} (was {before!r})",
+                    pytrace=False)
+    return result

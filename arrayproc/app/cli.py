@@ -334,6 +334,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         except Interrupted as e:  # a signal while parsing or reporting
             print(f"arrayproc: error: {e}; no output written", file=sys.stderr)
             return 128 + e.signum
+        except Exception as e:  # a signal inside an import of the parser's modules
+            stop = _pending_stop(e)  # comes back as that import's ImportError
+            if stop is None:
+                raise
+            return _stopped(stop)
     finally:
         for s in old:
             signal.signal(s, signal.SIG_IGN)
