@@ -20,8 +20,10 @@ peaks off it, on a sidelobe):
 - ``cone_deg``: vertex of the parabola through the beam row's dB levels at f* (b* and its two
   neighbours); ``bearing_port_deg = heading − cone``, ``bearing_stbd_deg = heading + cone``
   (deg true, the left-right pair; heading of the array at the snapshot); ``beam`` = b*;
-- ``freq_hz``: vertex of the parabola through the dB levels of beam b* at f* and its two
-  neighbouring bins (Gaussian interpolation: exact for a Gaussian main lobe);
+- ``freq_hz``: f* + δ·Δf, δ the vertex of the parabola through the dB levels of beam b* at
+  f* and its two neighbouring bins, with the frames' taper bias removed
+  (:func:`arrayproc.dsp.tone_offset.tone_offset`; the bare parabola is off by up to
+  0.016 bin for Hann frames, which a tracker fusing the frequencies reads as a change);
 - ``bandwidth_hz``: the half-power width of that spectrum around f*
   (:func:`arrayproc.dsp.peaks.half_power_width`), ≈ 1.44 bins for an unsmeared Hann tone;
 - ``snr_db``: r(b*, f*), the line over the TPSW background (10·log10((S + N)/N));
@@ -49,6 +51,7 @@ from arrayproc.chain.block import Block
 from arrayproc.chain.domains import Domain
 from arrayproc.dsp.bands import band_bins
 from arrayproc.dsp.peaks import half_power_width, parabolic_vertex
+from arrayproc.dsp.tone_offset import tone_offset
 from arrayproc.dsp.tpsw import tpsw, tpsw_db
 from arrayproc.errors import ConfigError
 from arrayproc.io.units import recording_units, reference_amplitude
@@ -132,10 +135,12 @@ class Lines(Stage):
                                                      self.ref) ** 2)
             off = received_level_offset_db(b, broadband=True) + lref
             freqs = np.asarray(b.freqs, float)[idx]
+            taper = (str(b.meta.window), int(b.meta.nfft))
             rows: dict[str, list] = {k: [] for k in COLUMNS}
             for s in range(b.data.shape[0]):
                 spec = np.ascontiguousarray(b.data[s][idx].T, dtype=np.float64)  # (B, F)
-                self._contacts(spec, freqs, cone, float(times[s]), float(heads[s]), off, rows)
+                self._contacts(spec, freqs, cone, float(times[s]), float(heads[s]), off, rows,
+                               taper)
             if out is not None and rows["time"]:
                 cols = {k: np.asarray(v, float) for k, v in rows.items()}
                 cols["beam"] = cols["beam"].astype(np.int64)
@@ -143,7 +148,8 @@ class Lines(Stage):
             yield b
 
     def _contacts(self, spec: np.ndarray, freqs: np.ndarray, cone: np.ndarray, t: float,
-                  heading: float, off_db: float, rows: dict[str, list]) -> None:
+                  heading: float, off_db: float, rows: dict[str, list],
+                  taper: tuple[str, int]) -> None:
         """Contacts of one snapshot's beam spectra ``spec`` (B, F) into ``rows``."""
         bg = tpsw(spec, self.tpsw_window, self.tpsw_gap, self.tpsw_clip)
         r_db = tpsw_db(spec, bg)
@@ -160,7 +166,7 @@ class Lines(Stage):
             sp = 10 * np.log10(np.maximum(spec[bi], 1e-300))
             f = float(freqs[fi])
             if 0 < fi < n_f - 1:
-                f, _ = parabolic_vertex(freqs[fi - 1:fi + 2], sp[fi - 1:fi + 2])
+                f += tone_offset(sp[fi - 1:fi + 2], *taper) * float(freqs[fi + 1] - freqs[fi])
             a, e = max(0, min(lo, fi - self.lobe_bins)), min(n_f, max(hi, fi + self.lobe_bins) + 1)
             excess = float(np.sum(spec[bi, a:e] - bg[bi, a:e]))
             rows["time"].append(t)
