@@ -9,9 +9,8 @@ import pytest
 
 from arrayproc.app.cli import main
 from arrayproc.data import data_path
-from arrayproc.io.products import ProductsWriter, read_products
-from arrayproc.io.recording import RecordingWriter
-from arrayproc.sim.scenario import tetrahedron
+from arrayproc.evaluate.scenarios.two_array_fusion import write_array_products
+from arrayproc.io.products import read_products
 from arrayproc.track.batch.bo_tma import bearing_model
 from arrayproc.track.batch.cross_fix import solve_cross_fix
 
@@ -23,24 +22,12 @@ CROSS_FIX = f"{data_path('tma')}/cross_fix.toml"
 
 
 def _array(tmp_path, name, site, rng, nav=True, source=True):
-    """A static tetrahedral array's recording (``/nav`` at ``site``) and its products file of
-    azimuth rows (the true bearing of the vessel plus N(0, σ))."""
-    rec = tmp_path / f"{name}_rec.h5"
-    with RecordingWriter(rec, 100.0, 4, positions=tetrahedron(1.84)) as w:
-        w.append(np.zeros((10, 4), np.float32))
-        if nav:
-            w.set_nav(TIMES, np.tile(site, (TIMES.size, 1)), np.full(TIMES.size, 30.0))
+    """A static tetrahedral array's recording and products file of azimuth rows (the true
+    bearing of the vessel plus N(0, σ)); returns the products path and the azimuths, deg."""
     n = TIMES.size
     az = np.rad2deg(bearing_model(TRUTH, TIMES, np.tile(site, (n, 1))))
     az = (az + rng.normal(0.0, SIGMA_DEG, n)) % 360.0
-    prod = tmp_path / f"{name}.h5"
-    with ProductsWriter(prod, source=str(rec) if source else "") as w:
-        w.group("bearings", "bearings").append(
-            time=TIMES, cone_deg=np.full(n, 90.0), bearing_port_deg=az, bearing_stbd_deg=az,
-            azimuth_deg=az, elevation_deg=np.zeros(n), sigma_deg=np.full(n, SIGMA_DEG),
-            level_db=np.full(n, 90.0), snr_db=np.full(n, 20.0), freq_lo=np.full(n, 100.0),
-            freq_hi=np.full(n, 400.0), spl_db=np.full(n, 90.0))
-    return prod, az
+    return write_array_products(tmp_path, name, site, TIMES, az, nav=nav, source=source), az
 
 
 def _cli(args, capsys):
