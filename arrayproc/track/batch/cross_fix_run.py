@@ -104,8 +104,8 @@ def solve_estimated_sigma(t: np.ndarray, y: np.ndarray, obs: np.ndarray, site: n
     A first fit with one σ for every row (the ML estimate for equal σ); then, ``n_iter``
     times, each array's σ² is the sum of its squared residuals over its share of the degrees
     of freedom, ``σ̂ₐ² = Σ rₐ² / (nₐ (1 − 4/N))`` (``N`` rows in all), and the fit is repeated
-    with those σ (eq. (3.47) weighted per row); the CRLB (eq. (3.53)) is the one at the last
-    σ̂.
+    with those σ (eq. (3.47) weighted per row), from the previous fit's state; the CRLB
+    (eq. (3.53)) is the one at the last σ̂.
 
     Parameters
     ----------
@@ -132,7 +132,7 @@ def solve_estimated_sigma(t: np.ndarray, y: np.ndarray, obs: np.ndarray, site: n
         for a in np.unique(site):
             m = site == a
             sig[m] = max(float(np.sqrt(np.sum(r[m] ** 2) / (m.sum() * dof))), 1e-9)
-        sol = solve_cross_fix(t, y, obs, sig, t0=t0, t1=t1)
+        sol = solve_cross_fix(t, y, obs, sig, t0=t0, t1=t1, x0=sol.state)
     return sol
 
 
