@@ -69,7 +69,8 @@ def tma(products: str | Sequence[str], config: str, output: str,
         Products HDF5 file with a bearings, lines or delays group, or a tracks file of the
         multi-target tracker (one solution per confirmed track,
         :mod:`arrayproc.track.batch.per_track`); for ``method = "cross_fix"`` two or more
-        products files, one per static array (:mod:`arrayproc.track.batch.cross_fix_run`).
+        products files, one per static array (:mod:`arrayproc.track.batch.cross_fix_run`),
+        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`).
     config : str
         TMA TOML file (``[tma] method = "bearings" | "bearings_frequency" | "delays" |
         "compact" | "cross_fix" | "auto"``, …).
@@ -88,12 +89,10 @@ def tma(products: str | Sequence[str], config: str, output: str,
     from arrayproc.chain.guard import running
     from arrayproc.track.batch.run import load_tma_config
     method = load_tma_config(config)["method"]  # configuration errors first
-    if method == "cross_fix" or len(paths) > 1:  # one products file per array
-        from arrayproc.track.batch.cross_fix_run import run_cross_fix
-        with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-            run_cross_fix(paths, config, output, progress=progress)
-        return
     from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
+    if method == "cross_fix" or len(paths) > 1:  # one products or tracks file per array
+        _cross_fix(paths, config, output, progress, [is_tracks_file(p) for p in paths])
+        return
     if is_tracks_file(paths[0]):  # one solution per confirmed track
         with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
             run_tracks_tma(paths[0], config, output, progress=progress)
@@ -101,6 +100,26 @@ def tma(products: str | Sequence[str], config: str, output: str,
     from arrayproc.track.batch.run import run_tma
     with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
         run_tma(paths[0], config, output, progress=progress)
+
+
+def _cross_fix(paths: list[str], config: str, output: str, progress: bool,
+               tracks: list[bool]) -> None:
+    """``method = "cross_fix"``: products files (:mod:`~arrayproc.track.batch.cross_fix_run`)
+    or two tracks files (:mod:`~arrayproc.track.batch.cross_fix_tracks`), not a mixture."""
+    from arrayproc.chain.guard import running
+    from arrayproc.errors import ConfigError
+    if any(tracks) and not all(tracks):
+        raise ConfigError("cross_fix reads either products files or tracks files, one per "
+                          "array, not both: "
+                          + ", ".join(p for p, t in zip(paths, tracks, strict=True) if t)
+                          + " hold tracks")
+    with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
+        if all(tracks):
+            from arrayproc.track.batch.cross_fix_tracks import run_cross_fix_tracks
+            run_cross_fix_tracks(paths, config, output, progress=progress)
+        else:
+            from arrayproc.track.batch.cross_fix_run import run_cross_fix
+            run_cross_fix(paths, config, output, progress=progress)
 
 
 def tracks_summary(path: str) -> str:

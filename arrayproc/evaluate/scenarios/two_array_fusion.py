@@ -82,7 +82,8 @@ def write_array_products(folder: str | os.PathLike, name: str, site: np.ndarray,
     """A static tetrahedral array's recording (``/nav`` at ``site`` unless not ``nav``) and
     its products file of azimuth rows (a ``bearings`` group as ``cbf_azel`` writes it,
     naming the recording as its ``source`` unless not ``source``); returns the products
-    file's path."""
+    file's path. ``azimuth_deg`` (n,) one target's rows, or (K, n) K targets' (a row of each
+    per time, the first the strongest: SNR 20, 17, … dB)."""
     from arrayproc.io.products import ProductsWriter
     from arrayproc.io.recording import RecordingWriter
     from arrayproc.sim.scenario import tetrahedron
@@ -94,14 +95,18 @@ def write_array_products(folder: str | os.PathLike, name: str, site: np.ndarray,
         w.append(np.zeros((10, 4), np.float32))
         if nav:
             w.set_nav(t, np.tile(np.asarray(site, float), (t.size, 1)), np.full(t.size, 30.0))
+    az = np.atleast_2d(np.asarray(azimuth_deg, float)) % 360.0
+    snr = np.repeat(20.0 - 3.0 * np.arange(az.shape[0]), t.size)
+    tt = np.tile(t, az.shape[0])
+    order = np.lexsort((-snr, tt))                  # by time, strongest first
+    t, az, snr = tt[order], az.reshape(-1)[order], snr[order]
     n = t.size
-    az = np.asarray(azimuth_deg, float) % 360.0
     prod = folder / f"{name}.h5"
     with ProductsWriter(prod, source=str(rec) if source else "") as w:
         w.group("bearings", "bearings").append(
             time=t, cone_deg=np.full(n, 90.0), bearing_port_deg=az, bearing_stbd_deg=az,
             azimuth_deg=az, elevation_deg=np.zeros(n), level_db=np.full(n, 90.0),
-            snr_db=np.full(n, 20.0), freq_lo=np.full(n, 100.0), freq_hi=np.full(n, 400.0),
+            snr_db=snr, freq_lo=np.full(n, 100.0), freq_hi=np.full(n, 400.0),
             spl_db=np.full(n, 90.0))
     return str(prod)
 

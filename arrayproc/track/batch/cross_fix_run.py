@@ -19,8 +19,8 @@ for each array from its residuals (:func:`solve_estimated_sigma`).
 
 Association: each file's rows are taken as one target's (the strongest row per time, as for
 one products file, after ``tma.cone_gate``): the rows of one vessel in a window, e.g. a
-window or gate chosen around one target. Pairing several targets' tracks across arrays is
-not done here.
+window or gate chosen around one target. Several targets: two arrays' tracks files, paired
+by :mod:`.cross_fix_tracks`.
 """
 from __future__ import annotations
 
@@ -48,7 +48,8 @@ from .run import (
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["STATIC_TOLERANCE_M", "read_array", "solve_estimated_sigma", "run_cross_fix"]
+__all__ = ["STATIC_TOLERANCE_M", "array_position", "read_array", "solve_estimated_sigma",
+           "run_cross_fix"]
 
 #: the largest distance (m) an array's phase centre may move from its mean over the rows read
 #: for the array to count as static (a mooring's swing; a moving array: ``bearings``)
@@ -82,19 +83,27 @@ def read_array(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]:
         raise FormatError(f"{products_path}: its recording {rec_path} does not exist: the "
                           "array's position is unknown")
     t = meas["time"]
+    return {"time": t, "bearing": true_bearings(meas, np.ones(t.size, bool), cfg),
+            "xy": array_position(products_path, rec_path, t), "recording": rec_path,
+            "products": products_path, "group": meas["group"]}
+
+
+def array_position(where: str, rec_path: str, times: np.ndarray) -> np.ndarray:
+    """A static array's position (2,) m: the mean of its phase centre (mean element
+    position, ``/nav`` and ``/array``) at ``times``; FormatError (naming ``where``) when the
+    recording has no ``/nav`` or the centre moves more than :data:`STATIC_TOLERANCE_M`."""
     with Recording(rec_path) as rec:
         if not rec.has("nav"):
-            raise FormatError(f"{products_path}: its recording {rec_path} has no /nav: the "
+            raise FormatError(f"{where}: its recording {rec_path} has no /nav: the "
                               "array's position is unknown")
-        centre = np.stack([p.elements[:, :2].mean(0) for p in rec.poses(t)])
+        centre = np.stack([p.elements[:, :2].mean(0) for p in rec.poses(times)])
     xy = centre.mean(0)
     drift = float(np.max(np.hypot(*(centre - xy).T)))
     if drift > STATIC_TOLERANCE_M:
-        raise FormatError(f"{products_path}: the array moves {drift:.3g} m over the rows "
+        raise FormatError(f"{where}: the array moves {drift:.3g} m over the rows "
                           f"(more than {STATIC_TOLERANCE_M:g} m): cross_fix is for static "
                           "arrays (a moving array: method = 'bearings')")
-    return {"time": t, "bearing": true_bearings(meas, np.ones(t.size, bool), cfg), "xy": xy,
-            "recording": rec_path, "products": products_path, "group": meas["group"]}
+    return xy
 
 
 def solve_estimated_sigma(t: np.ndarray, y: np.ndarray, obs: np.ndarray, site: np.ndarray,

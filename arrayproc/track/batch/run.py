@@ -166,6 +166,9 @@ PARAMS = Schema({
                                   "from the residuals of a first fit and refit with it"),
     "n_grid": Param("int", 200, "compact: grid nodes per axis", check=positive),
     "n_headings": Param("int", 72, "compact: headings", check=positive),
+    "pair_cost": Param("float", 3.0, "cross_fix of two tracks files: the largest cost per "
+                       "degree of freedom of two tracks' joint fit for them to be paired as "
+                       "one target", check=positive),
     "popsize": Param("int", 20, "differential-evolution population factor", check=positive),
     "maxiter": Param("int", 400, "differential-evolution generations", check=positive),
     "array_motion": Param("bool", True, "bearings/delays: correct for the array's motion "
@@ -542,12 +545,13 @@ def warn_if_far_from(sol: TmaSolution, sites_xy: np.ndarray, cfg: dict[str, Any]
     return True
 
 
-def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
-                ) -> dict[str, np.ndarray]:
+def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None,
+                pair_ids: list[int] | None = None) -> dict[str, np.ndarray]:
     """The ``tma`` rows of solutions (products kind ``tma``, docs/formats.md): the kinematic
     4 × 4 blocks of ``cov`` and ``crlb``; ``f0_hz`` and ``sigma_f0_hz`` (NaN without a rest
-    frequency) and ``track_id`` when ``track_ids`` (one per solution) is given. A solution is
-    ``preferred`` unless it is another's mirror."""
+    frequency) and ``track_id`` when ``track_ids`` (one per solution) is given, and
+    ``pair_track_id`` when ``pair_ids`` is. A solution is ``preferred`` unless it is another's
+    mirror."""
     mirrors = {id(s.mirror) for s in sols if s.mirror is not None}
     f0 = np.array([s.state[4] if s.state.size > 4 else np.nan for s in sols])
     sf0 = np.array([np.sqrt(s.crlb[4, 4]) if s.state.size > 4 else np.nan for s in sols])
@@ -572,12 +576,14 @@ def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
                     n_used=np.array([s.n_used for s in sols], np.int64))
     elif np.any(np.isfinite(f0)):
         cols.update(f0_hz=f0, sigma_f0_hz=sf0)
+    if pair_ids is not None:
+        cols.update(pair_track_id=np.asarray(pair_ids, np.int64))
     return cols
 
 
 def write_tma(output_path: str, sols: list[TmaSolution], rec_path: str, cfg: dict[str, Any],
               root_attrs: dict[str, Any], track_ids: list[int] | None = None,
-              **attrs: Any) -> None:
+              pair_ids: list[int] | None = None, **attrs: Any) -> None:
     """Write the solutions as one ``tma`` group named ``tma`` (:func:`tma_columns`); ``attrs``
     are the group's attributes beside the method's settings."""
     with ProductsWriter(output_path, source=rec_path, attrs=root_attrs) as w:
@@ -588,7 +594,7 @@ def write_tma(output_path: str, sols: list[TmaSolution], rec_path: str, cfg: dic
                     delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols),
                     array_motion=int(cfg["array_motion"]),
                     retarded_time=int(cfg["retarded_time"]), **attrs)
-        g.append(**tma_columns(sols, track_ids))
+        g.append(**tma_columns(sols, track_ids, pair_ids))
 
 
 def with_unresolved_mirrors(sols: list[TmaSolution], chi2: float, where: str
