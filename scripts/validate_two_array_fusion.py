@@ -13,7 +13,15 @@ import tempfile
 
 import numpy as np
 
+from arrayproc.app.cli import main as cli_main
 from arrayproc.evaluate.scenarios.two_array_fusion import run_fusion, run_fusion_cli
+
+
+def _command(inputs: list[str], config: str, output: str) -> None:
+    """``arrayproc tma INPUTS… -c CONFIG -o OUTPUT -q`` through the command line's main."""
+    rc = cli_main(["tma", *inputs, "-c", config, "-o", output, "-q"])
+    if rc != 0:
+        raise SystemExit(f"arrayproc tma exited {rc}")
 
 
 def cli_table(runs: int, baseline: float, sigma_deg: float, rng: np.random.Generator) -> None:
@@ -22,7 +30,7 @@ def cli_table(runs: int, baseline: float, sigma_deg: float, rng: np.random.Gener
           "| mean NEES | max abs z |")
     for d in (200.0, 500.0, 1000.0, 2000.0):
         with tempfile.TemporaryDirectory() as tmp:
-            r = run_fusion_cli(d, baseline, sigma_deg, runs, rng, tmp)
+            r = run_fusion_cli(d, baseline, sigma_deg, runs, rng, tmp, tma=_command)
         print(f"| {d:.0f} | {r['rmse_pos_m']:.1f} | {r['crlb_pos_m']:.1f} | "
               f"{r['ratio_pos']:.2f} | {r['rmse_vel_mps']:.3f} | {r['crlb_vel_mps']:.3f} | "
               f"{r['ratio_vel']:.2f} | {r['mean_nees']:.2f} | {r['max_abs_z']:.2f} |",

@@ -87,39 +87,9 @@ def tma(products: str | Sequence[str], config: str, output: str,
             inputs.append(rec)  # the recording whose navigation and geometry are read
     check_output(output, inputs)
     from arrayproc.chain.guard import running
-    from arrayproc.track.batch.run import load_tma_config
-    method = load_tma_config(config)["method"]  # configuration errors first
-    from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
-    if method == "cross_fix" or len(paths) > 1:  # one products or tracks file per array
-        _cross_fix(paths, config, output, progress, [is_tracks_file(p) for p in paths])
-        return
-    if is_tracks_file(paths[0]):  # one solution per confirmed track
-        with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-            run_tracks_tma(paths[0], config, output, progress=progress)
-        return
-    from arrayproc.track.batch.run import run_tma
+    from arrayproc.track.batch.inputs import run_tma_inputs
     with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-        run_tma(paths[0], config, output, progress=progress)
-
-
-def _cross_fix(paths: list[str], config: str, output: str, progress: bool,
-               tracks: list[bool]) -> None:
-    """``method = "cross_fix"``: products files (:mod:`~arrayproc.track.batch.cross_fix_run`)
-    or two tracks files (:mod:`~arrayproc.track.batch.cross_fix_tracks`), not a mixture."""
-    from arrayproc.chain.guard import running
-    from arrayproc.errors import ConfigError
-    if any(tracks) and not all(tracks):
-        raise ConfigError("cross_fix reads either products files or tracks files, one per "
-                          "array, not both: "
-                          + ", ".join(p for p, t in zip(paths, tracks, strict=True) if t)
-                          + " hold tracks")
-    with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-        if all(tracks):
-            from arrayproc.track.batch.cross_fix_tracks import run_cross_fix_tracks
-            run_cross_fix_tracks(paths, config, output, progress=progress)
-        else:
-            from arrayproc.track.batch.cross_fix_run import run_cross_fix
-            run_cross_fix(paths, config, output, progress=progress)
+        run_tma_inputs(paths, config, output, progress=progress)
 
 
 def tracks_summary(path: str) -> str:

@@ -15,6 +15,7 @@ command line: each array's rows a products file (:func:`write_array_products`), 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -112,14 +113,19 @@ def write_array_products(folder: str | os.PathLike, name: str, site: np.ndarray,
 
 
 def run_fusion_cli(d_cpa: float, baseline: float, sigma_deg: float, runs: int,
-                   rng: np.random.Generator, folder: str | os.PathLike) -> dict:
+                   rng: np.random.Generator, folder: str | os.PathLike,
+                   tma: Callable[[list[str], str, str], None] | None = None) -> dict:
     """``runs`` runs of :func:`run_fusion`'s geometry through ``arrayproc tma A.h5 B.h5 -c
     cross_fix`` (the shipped configuration: each array's σ estimated): position and velocity
     RMSE against the CRLB of the true state and σ, and the mean NEES against each run's own
-    ``crlb`` row (that of its estimated σ)."""
-    from arrayproc.app.cli import main
+    ``crlb`` row (that of its estimated σ). ``tma(inputs, config, output)`` runs the command
+    (default :func:`arrayproc.evaluate.pipeline.tma`, the command's library call;
+    ``scripts/validate_two_array_fusion.py`` gives the command line's ``main``)."""
     from arrayproc.data import data_path
+    from arrayproc.evaluate.pipeline import tma as pipeline_tma
     from arrayproc.io.products import read_products
+
+    run = pipeline_tma if tma is None else tma
 
     t1 = np.arange(0.0, DURATION + 1e-9, DT)
     sites = np.array([[0.0, 0.0], [baseline, 0.0]])
@@ -136,9 +142,7 @@ def run_fusion_cli(d_cpa: float, baseline: float, sigma_deg: float, runs: int,
             az = np.rad2deg(clean + rng.normal(0.0, sig, t1.size))
             paths.append(write_array_products(folder, f"{name}{k}", site, t1, az))
         out = Path(folder) / f"tma{k}.h5"
-        rc = main(["tma", *paths, "-c", cfg, "-o", str(out), "-q"])
-        if rc != 0:
-            raise RuntimeError(f"arrayproc tma exited {rc}")
+        run(paths, cfg, str(out))
         g = read_products(str(out))["tma"]
         e = np.array([g["x"][0], g["y"][0], g["vx"][0], g["vy"][0]]) - x
         errs.append(e)
