@@ -272,9 +272,13 @@ def _add_track(sub: Any) -> None:
 
 def _add_tma(sub: Any) -> None:
     s = sub.add_parser("tma", help="batch ML target motion analysis (bearings, bearings + "
-                       "frequency, delays or compact) with Cramér-Rao bounds")
-    s.add_argument("products", help="products HDF5 file with bearings, lines or delays, or a "
-                   "multi-target tracks file (one solution per confirmed track)")
+                       "frequency, delays, compact, or the cross-fix of several static "
+                       "arrays) with Cramér-Rao bounds")
+    s.add_argument("products", nargs="+", help="products HDF5 file with bearings, lines or "
+                   "delays, or a multi-target tracks file (one solution per confirmed track); "
+                   "method = \"cross_fix\": two or more products files, one per static "
+                   "array, each naming its recording (the array's position), or two such "
+                   "arrays' tracks files (their tracks paired across the arrays)")
     add_config(s, "TMA TOML file")
     add_output(s, "products HDF5 file to write")
     add_no_progress(s)

@@ -6,6 +6,7 @@ replace.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from arrayproc.app.inputs import TRACK_INPUT, check_product_input
@@ -58,37 +59,37 @@ def _products_source(products: str) -> str | None:
 
 
 # -- tma --------------------------------------------------------------------------------------
-def tma(products: str, config: str, output: str, progress: bool = False) -> None:
+def tma(products: str | Sequence[str], config: str, output: str,
+        progress: bool = False) -> None:
     """Batch maximum-likelihood TMA with its CRLB (thesis 3.3; compact-array paper eqs. 1-5).
 
     Parameters
     ----------
-    products : str
+    products : str or sequence of str
         Products HDF5 file with a bearings, lines or delays group, or a tracks file of the
         multi-target tracker (one solution per confirmed track,
-        :mod:`arrayproc.track.batch.per_track`).
+        :mod:`arrayproc.track.batch.per_track`); for ``method = "cross_fix"`` two or more
+        products files, one per static array (:mod:`arrayproc.track.batch.cross_fix_run`),
+        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`).
     config : str
         TMA TOML file (``[tma] method = "bearings" | "bearings_frequency" | "delays" |
-        "compact" | "auto"``, …).
+        "compact" | "cross_fix" | "auto"``, …).
     output : str
         Products HDF5 file to write (one ``tma`` group).
     progress : bool
         One line per solution on stderr.
     """
-    inputs = [products, config]
-    rec = _products_source(products)
-    if rec is not None:
-        inputs.append(rec)  # the recording whose navigation and geometry are read
+    paths = [products] if isinstance(products, str) else list(products)
+    inputs = [*paths, config]
+    for p in paths:
+        rec = _products_source(p)
+        if rec is not None:
+            inputs.append(rec)  # the recording whose navigation and geometry are read
     check_output(output, inputs)
     from arrayproc.chain.guard import running
-    from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
-    if is_tracks_file(products):  # one solution per confirmed track
-        with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-            run_tracks_tma(products, config, output, progress=progress)
-        return
-    from arrayproc.track.batch.run import run_tma
+    from arrayproc.track.batch.inputs import run_tma_inputs
     with running(f"the TMA of {Path(config).name}"):  # named by the memory guard
-        run_tma(products, config, output, progress=progress)
+        run_tma_inputs(paths, config, output, progress=progress)
 
 
 def tracks_summary(path: str) -> str:

@@ -9,15 +9,14 @@ the commands produce from the same files: the same functions, in the same order.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from arrayproc.io.products import ProductsWriter
 from arrayproc.io.recording import Recording
 from arrayproc.sim.run import simulate_file
 from arrayproc.stages import load_chain
-from arrayproc.track.batch.per_track import is_tracks_file, run_tracks_tma
-from arrayproc.track.batch.run import run_tma
+from arrayproc.track.batch.inputs import run_tma_inputs
 from arrayproc.track.runner import run_tracker
 
 __all__ = ["process", "simulate", "tma", "track"]
@@ -46,10 +45,8 @@ def track(products: str, config: str, output: str) -> None:
     run_tracker(products, config, output)
 
 
-def tma(products: str, config: str, output: str) -> None:
-    """``arrayproc tma PRODUCTS_OR_TRACKS -c TMA -o OUTPUT``: one solution per confirmed track
-    of a tracks file, or the solutions of a products file."""
-    if is_tracks_file(products):
-        run_tracks_tma(products, config, output)
-    else:
-        run_tma(products, config, output)
+def tma(products: str | Sequence[str], config: str, output: str) -> None:
+    """``arrayproc tma PRODUCTS_OR_TRACKS… -c TMA -o OUTPUT``: one solution per confirmed
+    track of a tracks file, the solutions of a products file, or (``method = "cross_fix"``)
+    of several arrays' files (:func:`arrayproc.track.batch.inputs.run_tma_inputs`)."""
+    run_tma_inputs(products, config, output)

@@ -275,7 +275,8 @@ _KINDS = [
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),
         "t1": _c("s", "window end"),
-        "method": _c("", "bearings, bearings_frequency, delays or compact", dtype="S20"),
+        "method": _c("", "bearings, bearings_frequency, delays, compact or cross_fix",
+                     dtype="S20"),
         "x": _c("m", "east"), "y": _c("m", "north"),
         "vx": _c("m/s", "east velocity"), "vy": _c("m/s", "north velocity"),
         "cov": _c("m², m²/s²", "covariance of the estimate, (n, 4, 4)", trailing=(4, 4),
@@ -293,6 +294,8 @@ _KINDS = [
         # one solution per track (a tracks file's input)
         "track_id": _c("", "the track solved (its rows in the tracks file)", False,
                        dtype="i8"),
+        "pair_track_id": _c("", "cross_fix of two tracks files: the second array's track "
+                            "paired with track_id", False, dtype="i8"),
         "f0_hz": _c("Hz", "rest frequency of the tonal (bearings_frequency)", False),
         "sigma_f0_hz": _c("Hz", "CRLB standard deviation of f0_hz", False),
         "n_used": _c("", "measurement rows used", False, dtype="i8"),

@@ -13,7 +13,7 @@ from scipy.optimize import least_squares
 
 from .bo_tma import _wrap, bearing_model
 from .fim import bo_fim, bo_jacobian
-from .result import TmaSolution, finish_solution
+from .result import TmaSolution, end_value, finish_solution
 
 
 def _ray_intersection(a: np.ndarray, ba: float, b: np.ndarray, bb: float) -> np.ndarray | None:
@@ -31,14 +31,17 @@ def _ray_intersection(a: np.ndarray, ba: float, b: np.ndarray, bb: float) -> np.
 
 def _initial_state(t: np.ndarray, y: np.ndarray, obs: np.ndarray, t0: float,
                    t1: float) -> np.ndarray:
-    """CV state at ``t0`` from the cross-fixes of the first two arrays at ``t0`` and ``t1``."""
+    """CV state at ``t0`` from the cross-fixes of the first two arrays at ``t0`` and ``t1``,
+    each array's bearing there from a straight line through its rows nearest that end
+    (:func:`.result.end_value`: one noisy row would turn the near-parallel rays of a distant
+    target into a fix far beyond it)."""
     sites = np.unique(obs, axis=0)
     fixes = []
     for at in (t0, t1):
         b = []
         for s in sites[:2]:
             m = np.all(obs == s, axis=1)
-            b.append(float(np.interp(at, t[m], np.unwrap(y[m]))))
+            b.append(end_value(t[m], y[m], at, n_fit=max(10, int(m.sum()) // 10))[0])
         fixes.append(_ray_intersection(sites[0], b[0], sites[1], b[1]))
     if fixes[0] is None or fixes[1] is None:
         c = sites.mean(axis=0)
@@ -49,7 +52,7 @@ def _initial_state(t: np.ndarray, y: np.ndarray, obs: np.ndarray, t0: float,
 
 def solve_cross_fix(times: np.ndarray, bearings_rad: np.ndarray, array_xy: np.ndarray,
                     sigma_rad: float | np.ndarray, *, t0: float | None = None,
-                    t1: float | None = None) -> TmaSolution:
+                    t1: float | None = None, x0: np.ndarray | None = None) -> TmaSolution:
     """ML cross-fix TMA of static arrays with no speed prior (eqs. (3.47), (3.53)).
 
     Parameters
@@ -64,6 +67,8 @@ def solve_cross_fix(times: np.ndarray, bearings_rad: np.ndarray, array_xy: np.nd
         Bearing standard deviation per row (rad).
     t0, t1 : float, optional
         Window start (the state's time) and end (s).
+    x0 : (4,) array_like, optional
+        Starting state of the local fit (default: the cross-fixes at the window's ends).
 
     Returns
     -------
@@ -89,7 +94,7 @@ def solve_cross_fix(times: np.ndarray, bearings_rad: np.ndarray, array_xy: np.nd
     def jac(x: np.ndarray) -> np.ndarray:
         return -w[:, None] * bo_jacobian(x, tau, obs)
 
-    x0 = _initial_state(t, y, obs, t0, t1)
+    x0 = _initial_state(t, y, obs, t0, t1) if x0 is None else np.asarray(x0, float)
     x = least_squares(res, x0, jac=jac, method="lm", xtol=1e-12, ftol=1e-12).x
     r = res(x)
     sol = finish_solution("cross_fix", t0, t1, x, r, jac(x), bo_fim(x, tau, obs, sig),

@@ -9,10 +9,11 @@ file with one ``tma`` group (one row per solution: ``t0``, ``t1``, ``method``, `
 
 Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (eqs.
 (3.48)-(3.52), :mod:`.td_tma`), ``compact`` (compact-array paper eqs. (1)-(5),
-:mod:`.compact`). TMA TOML::
+:mod:`.compact`); ``cross_fix`` reads several products files, one per static array
+(:mod:`.cross_fix_run`). TMA TOML::
 
     [tma]
-    method = "bearings"        # bearings | delays | compact
+    method = "bearings"        # bearings | delays | compact | cross_fix
     window = 600.0             # s, one solution per window; 0 (default): the whole file
     step = 300.0               # s between window starts (default: window)
     sigma_bearing_deg = 0.5    # bearings/compact; absent: estimated from the residuals
@@ -107,7 +108,8 @@ from .td_tma import solve_delays
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements", "solve_window"]
+__all__ = ["PARAMS", "load_tma_config", "run_tma", "read_measurements", "solve_window",
+           "true_bearings"]
 
 
 def _non_negative(v: Any) -> str | None:
@@ -124,10 +126,12 @@ def _gate(v: Any) -> str | None:
 
 
 PARAMS = Schema({
-    "method": Param("str", doc="bearings | bearings_frequency | delays | compact | auto "
-                    "(a tracks file: bearings_frequency for a track with line frequencies, "
-                    "else bearings; a products file: bearings)",
-                    choices=("bearings", "bearings_frequency", "delays", "compact", "auto")),
+    "method": Param("str", doc="bearings | bearings_frequency | delays | compact | "
+                    "cross_fix | auto (a tracks file: bearings_frequency for a track with line "
+                    "frequencies, else bearings; a products file: bearings); cross_fix: the "
+                    "bearings of two or more static arrays' products files",
+                    choices=("bearings", "bearings_frequency", "delays", "compact",
+                             "cross_fix", "auto")),
     "window": Param("float", 0.0, "s per solution; 0: the whole file", check=_non_negative),
     "step": Param("float", 0.0, "s between window starts; 0: the window", check=_non_negative),
     "sigma_bearing_deg": Param("float", 0.0, "bearing σ, deg; 0: estimated", check=_non_negative),
@@ -162,6 +166,9 @@ PARAMS = Schema({
                                   "from the residuals of a first fit and refit with it"),
     "n_grid": Param("int", 200, "compact: grid nodes per axis", check=positive),
     "n_headings": Param("int", 72, "compact: headings", check=positive),
+    "pair_cost": Param("float", 3.0, "cross_fix of two tracks files: the largest cost per "
+                       "degree of freedom of two tracks' joint fit for them to be paired as "
+                       "one target", check=positive),
     "popsize": Param("int", 20, "differential-evolution population factor", check=positive),
     "maxiter": Param("int", 400, "differential-evolution generations", check=positive),
     "array_motion": Param("bool", True, "bearings/delays: correct for the array's motion "
@@ -395,17 +402,7 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
     obs = np.stack([p.elements[:, :2].mean(0) for p in poses])     # phase centre
     sig = np.deg2rad(cfg["sigma_bearing_deg"]) or None
     if cfg["method"] == "compact":
-        port, stbd = meas["port"][sel], meas["stbd"][sel]
-        same = np.allclose(np.angle(np.exp(1j * (port - stbd))), 0.0, atol=1e-9)
-        if meas.get("azimuth") is not None:  # azimuths of a volumetric array: unambiguous
-            y = meas["azimuth"][sel]
-        elif same or cfg["side"] == "starboard":
-            y = stbd
-        elif cfg["side"] == "port":
-            y = port
-        else:
-            raise ConfigError("tma.side must be 'port' or 'starboard' for method = 'compact' "
-                              "on a line array's bearings (their port and starboard differ)")
+        y = true_bearings(meas, sel, cfg)
         kw = dict(speed_mps=cfg["speed_mps"], sigma_speed_mps=cfg["sigma_speed_mps"],
                   correlation_s=cfg["correlation_s"], t0=w0, t1=w1,
                   max_range_m=cfg["max_range_m"], n_grid=cfg["n_grid"],
@@ -427,6 +424,23 @@ def solve_window(meas: dict, rec: Recording, cfg: dict, w0: float, w1: float) ->
     return solve_line_bearings(ts, meas["cone"][sel], meas["heading"][sel], obs, sig,
                                side=cfg["side"], axial_speed_mps=v_ax,
                                sound_speed=rec.sound_speed, **kw)
+
+
+def true_bearings(meas: Mapping[str, Any], sel: np.ndarray, cfg: Mapping[str, Any]
+                  ) -> np.ndarray:
+    """The rows ``sel``'s true bearings (rad) for the methods that read one bearing per row
+    (``compact``, ``cross_fix``): a volumetric/planar array's azimuths, else the port/starboard
+    pair when they agree, else the side ``tma.side`` names (ConfigError when it names none)."""
+    port, stbd = meas["port"][sel], meas["stbd"][sel]
+    same = np.allclose(np.angle(np.exp(1j * (port - stbd))), 0.0, atol=1e-9)
+    if meas.get("azimuth") is not None:  # azimuths of a volumetric array: unambiguous
+        return meas["azimuth"][sel]
+    if same or cfg["side"] == "starboard":
+        return stbd
+    if cfg["side"] == "port":
+        return port
+    raise ConfigError(f"tma.side must be 'port' or 'starboard' for method = '{cfg['method']}' "
+                      "on a line array's bearings (their port and starboard differ)")
 
 
 def _solve_bf(meas: dict, sel: np.ndarray, ts: np.ndarray, poses: list, obs: np.ndarray,
@@ -474,6 +488,9 @@ def run_tma(products_path: str, config_path: str, output_path: str,
     list of TmaSolution
     """
     cfg = load_tma_config(config_path)
+    if cfg["method"] == "cross_fix":
+        raise ConfigError(f"{config_path}: tma.method = 'cross_fix' reads two or more products "
+                          f"files, one per array; only {products_path} was given")
     if cfg["method"] == "auto":  # a products file's bearing rows carry no source's tonal
         cfg["method"] = "bearings"
     meas = read_measurements(products_path, cfg)
@@ -510,23 +527,31 @@ def run_tma(products_path: str, config_path: str, output_path: str,
 def warn_if_far(sol: TmaSolution, rec: Recording, cfg: dict[str, Any], where: str) -> bool:
     """Warn (and return True) when a solution lies beyond twice ``tma.max_range_m`` from the
     array at its start: the rows may be unobservable (no ownship manoeuvre) or mix sources."""
-    own = rec.nav.at(sol.t0)[0][0]
-    rng = float(np.hypot(sol.state[0] - own[0], sol.state[1] - own[1]))
+    return warn_if_far_from(sol, rec.nav.at(sol.t0)[0][:1], cfg, where)
+
+
+def warn_if_far_from(sol: TmaSolution, sites_xy: np.ndarray, cfg: dict[str, Any],
+                     where: str) -> bool:
+    """Warn (and return True) when a solution lies beyond twice ``tma.max_range_m`` from the
+    nearest of the arrays at ``sites_xy`` ((n, 2) m) at its start (:func:`warn_if_far`)."""
+    d = np.asarray(sites_xy, float).reshape(-1, 2) - np.asarray(sol.state[:2], float)
+    rng = float(np.min(np.hypot(d[:, 0], d[:, 1])))
     if rng <= 2.0 * cfg["max_range_m"]:
         return False
     warnings.warn(f"{where}: the solution lies {rng:.3g} m away, beyond twice "
                   "tma.max_range_m: the rows may be unobservable (no ownship manoeuvre) or "
                   "mix several sources (give one source's rows, e.g. a cone_gate)",
-                  stacklevel=3)
+                  stacklevel=4)
     return True
 
 
-def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
-                ) -> dict[str, np.ndarray]:
+def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None,
+                pair_ids: list[int] | None = None) -> dict[str, np.ndarray]:
     """The ``tma`` rows of solutions (products kind ``tma``, docs/formats.md): the kinematic
     4 × 4 blocks of ``cov`` and ``crlb``; ``f0_hz`` and ``sigma_f0_hz`` (NaN without a rest
-    frequency) and ``track_id`` when ``track_ids`` (one per solution) is given. A solution is
-    ``preferred`` unless it is another's mirror."""
+    frequency) and ``track_id`` when ``track_ids`` (one per solution) is given, and
+    ``pair_track_id`` when ``pair_ids`` is. A solution is ``preferred`` unless it is another's
+    mirror."""
     mirrors = {id(s.mirror) for s in sols if s.mirror is not None}
     f0 = np.array([s.state[4] if s.state.size > 4 else np.nan for s in sols])
     sf0 = np.array([np.sqrt(s.crlb[4, 4]) if s.state.size > 4 else np.nan for s in sols])
@@ -551,12 +576,14 @@ def tma_columns(sols: list[TmaSolution], track_ids: list[int] | None = None
                     n_used=np.array([s.n_used for s in sols], np.int64))
     elif np.any(np.isfinite(f0)):
         cols.update(f0_hz=f0, sigma_f0_hz=sf0)
+    if pair_ids is not None:
+        cols.update(pair_track_id=np.asarray(pair_ids, np.int64))
     return cols
 
 
 def write_tma(output_path: str, sols: list[TmaSolution], rec_path: str, cfg: dict[str, Any],
               root_attrs: dict[str, Any], track_ids: list[int] | None = None,
-              **attrs: Any) -> None:
+              pair_ids: list[int] | None = None, **attrs: Any) -> None:
     """Write the solutions as one ``tma`` group named ``tma`` (:func:`tma_columns`); ``attrs``
     are the group's attributes beside the method's settings."""
     with ProductsWriter(output_path, source=rec_path, attrs=root_attrs) as w:
@@ -567,7 +594,7 @@ def write_tma(output_path: str, sols: list[TmaSolution], rec_path: str, cfg: dic
                     delay_correlation=",".join(f"{s.correlation:.3f}" for s in sols),
                     array_motion=int(cfg["array_motion"]),
                     retarded_time=int(cfg["retarded_time"]), **attrs)
-        g.append(**tma_columns(sols, track_ids))
+        g.append(**tma_columns(sols, track_ids, pair_ids))
 
 
 def with_unresolved_mirrors(sols: list[TmaSolution], chi2: float, where: str
