@@ -144,13 +144,17 @@ def cv_propagate_points(X, T: float, o0, o1, Y) -> None:
 
 @njit(cache=True)
 def ct_propagate_points(X, T: float, o0, o1, Y) -> None:
-    """:func:`ct_propagate` on every row of ``X``; writes the rows of ``Y``."""
-    n = X.shape[1]
-    yi = np.empty(n)
+    """:func:`ct_propagate` on every row of ``X``; writes the rows of ``Y`` (the same
+    arithmetic, written out so that no row is staged through a temporary)."""
     for p in range(X.shape[0]):
-        ct_propagate(X[p], T, o0, o1, yi)
-        for i in range(n):
-            Y[p, i] = yi[i]
+        avx = X[p, 2] + o0[2]
+        avy = X[p, 3] + o0[3]
+        a, b, c, s = ct_coeffs(X[p, 4], T)
+        Y[p, 0] = X[p, 0] + o0[0] + a * avx - b * avy - o1[0]
+        Y[p, 1] = X[p, 1] + o0[1] + b * avx + a * avy - o1[1]
+        Y[p, 2] = c * avx - s * avy - o1[2]
+        Y[p, 3] = s * avx + c * avy - o1[3]
+        Y[p, 4] = X[p, 4]
 
 
 # ---------------------------------------------------------------------------- bearing
