@@ -45,8 +45,9 @@ _TEST_NAME = re.compile(r"([\w./-]+\.py)::(\w+)")
 _DOTTED = re.compile(r"(?<![\w.\"'])(arrayproc(?:\.\w+)+)")  # not a quoted string value
 _TICKED = re.compile(r"`{1,2}~?([A-Za-z_][\w]*(?:\.[A-Za-z_]\w*)+)(?:\(\))?`{1,2}")
 _ROLE = re.compile(r":(?:func|class|meth|mod|attr|data|obj|exc):`~?([A-Za-z_][\w.]*)`")
-# "issue" followed by a number, the old design notes by name or by section
-_POINTER = re.compile(r"(?i:\bissues?\s*#?\d+)|\bDESIGN\b(?:\s*(?:section|§)|\.md)?")
+# "issue" followed by a number (or a bare number after "#" in brackets), the old design
+# notes by name or by section
+_POINTER = re.compile(r"(?i:\bissues?\s*#?\d+)|\(#\d+\)|\bDESIGN\b(?:\s*(?:section|§)|\.md)?")
 
 
 def markdown_files() -> list[Path]:
