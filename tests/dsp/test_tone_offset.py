@@ -30,8 +30,10 @@ def test_other_scipy_tapers_are_summed_directly():
 
 
 # a noiseless tone at bin 300 + δ of 2048: the error left is the negative-frequency image's
-# leakage, largest for Hamming (far sidelobes near -43 dB fall off slowly: ~1e-4 bin)
-TOLERANCE_BINS = {"hann": 1e-6, "blackman": 1e-6, "blackmanharris": 1e-6, "hamming": 3e-4}
+# leakage, larger for Hamming (far sidelobes near -43 dB fall off slowly: ~1e-4 bin) and for
+# no taper (sidelobes falling as 1/ν: ~1.4e-3 bin, where the bare parabola is 0.17 bin off)
+TOLERANCE_BINS = {"hann": 1e-6, "blackman": 1e-6, "blackmanharris": 1e-6, "hamming": 3e-4,
+                  "none": 3e-3}
 
 
 @pytest.mark.parametrize("window", sorted(TOLERANCE_BINS))
