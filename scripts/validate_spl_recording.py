@@ -5,10 +5,11 @@ scenario (docs/validation/spl_recording.md), through the library calls of the co
     arrayproc process rec.h5 -c arrayproc/data/chains/spl_tma.toml -o products.h5
     arrayproc track products.h5 -c <RPF, bearings only | with level = "spl_db"> -o tracks.h5
 
-for ``--seeds`` seeds (each recording deleted once processed; per-seed results cached in
-``--workdir``), scored against the simulator's truth, next to the measurement-level Monte
-Carlo with the paper's σ's and with the σ's measured on the recordings
-(:mod:`arrayproc.evaluate.spl_recording`).
+for ``--seeds`` seeds (each recording deleted once processed; per-seed results and the
+products kept in ``--workdir``), scored against the simulator's truth; the same products
+through the RPF with the true side of each bearing pair (no left-right hypotheses); the
+measurement-level Monte Carlo with the paper's σ's, with the recordings' mean errors and
+residual σ's, and with the residual σ's alone (:mod:`arrayproc.evaluate.spl_recording`).
 
     python scripts/validate_spl_recording.py --seeds 20 --workdir /tmp/spl \
         --json docs/results/spl_recording.json --figure docs/figures/spl_recording_rmse.png
@@ -21,10 +22,14 @@ import json
 import sys
 import time
 
+import numpy as np
+
 
 def main() -> None:
+    from arrayproc.evaluate.accuracy import rmse
     from arrayproc.evaluate.spl_recording import (
         cached_seed,
+        known_side_errors,
         measurement_level,
         plot_rmse,
         summarise,
@@ -48,20 +53,37 @@ def main() -> None:
         print(f"seed {s}: {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     out = {"scenario": "tma_spl_paper", "chain": "spl_tma", "particles": a.particles,
            "duration_s": a.duration, **summarise(runs)}
+    known = [known_side_errors(f"{a.workdir}/products_{s}.h5", a.particles, s)
+             for s in out["seeds"]]
+    for lab in ("bot", "spl"):
+        out[f"rmse_known_side_{lab}_m"] = rmse(np.stack([k[f"err_{lab}_m"] for k in known])
+                                               ).tolist()
     out["measurement_level_paper"] = measurement_level(a.mc_runs, a.particles, 1)
-    out["measurement_level_measured"] = measurement_level(
-        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_std_deg"],
-        sigma_level_db=out["level_err_std_db"], bearing_bias_deg=out["bearing_err_bias_deg"],
-        level_bias_db=out["level_err_mean_db"])
+    out["measurement_level_recording"] = measurement_level(
+        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
+        sigma_level_db=out["level_err_residual_std_db"],
+        offsets=(out["time_s"], out["bearing_err_mean_by_time_deg"],
+                 out["level_err_mean_by_time_db"]))
+    out["measurement_level_residual"] = measurement_level(
+        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
+        sigma_level_db=out["level_err_residual_std_db"])
     text = json.dumps(out, indent=1)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as f:
             f.write(text + "\n")
     if a.figure:
         plot_rmse(out, a.figure)
-    keys = ("level_err_mean_db", "level_err_std_db", "bearing_err_bias_deg",
-            "bearing_err_std_deg", "median_final_error_bot_m", "median_final_error_spl_m")
+    keys = ("level_err_mean_db", "level_err_std_db", "level_err_residual_std_db",
+            "bearing_err_mean_deg", "bearing_err_std_deg", "bearing_err_residual_std_deg",
+            "median_final_error_bot_m", "median_final_error_spl_m", "segments")
     print(json.dumps({k: out[k] for k in keys}, indent=1))
+    for k in ("time_min", "rmse_bot_m", "rmse_spl_m", "rmse_known_side_bot_m",
+              "rmse_known_side_spl_m"):
+        print(k, " ".join(f"{v:.0f}" if k != "time_min" else f"{v:.1f}" for v in out[k]))
+    for key in ("measurement_level_paper", "measurement_level_recording",
+                "measurement_level_residual"):
+        for lab in ("bot", "spl"):
+            print(key, lab, " ".join(f"{v:.0f}" for v in out[key][f"rmse_{lab}_m"]))
 
 
 if __name__ == "__main__":

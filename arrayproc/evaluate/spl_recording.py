@@ -40,7 +40,8 @@ from arrayproc.io.recording import Recording
 
 __all__ = ["SCENARIO", "CHAIN", "TL_NAME", "recording_truth", "true_bearings",
            "true_received_level", "product_errors", "tracker_toml", "run_seed",
-           "summarise", "measurement_level", "cached_seed", "plot_rmse"]
+           "summarise", "measurement_level", "cached_seed", "plot_rmse",
+           "integration_sweeps", "SEGMENTS", "known_side_errors"]
 
 SCENARIO = "tma_spl_paper"
 CHAIN = "spl_tma"
@@ -219,18 +220,51 @@ def run_seed(seed: int, workdir: str, duration: float | None = None, particles: 
     return out
 
 
+#: the three parts of the manoeuvring scenario by row time, min: first leg, turn, second leg
+SEGMENTS = {"first leg (0-13 min)": (0.0, 13.0), "turn (13-17 min)": (13.0, 17.0),
+            "second leg (17-30 min)": (17.0, 30.0)}
+
+
+def integration_sweeps(times_s: np.ndarray, window_s: float = 60.0) -> dict[str, np.ndarray]:
+    """How far the geometry moves during one integration window centred on each row time:
+    the change of the true bearing and of the array heading over [t − w/2, t + w/2] (deg),
+    and the true cone angle at t (deg from the array's forward axis), from the scenario's
+    tracks (:func:`~arrayproc.evaluate.scenarios.spl_paper.get_scenario` ``manoeuvring``, the
+    same legs as ``tma_spl_paper.toml``)."""
+    from arrayproc.evaluate.scenarios.spl_paper import get_scenario
+
+    sc = get_scenario("manoeuvring")
+    t = np.asarray(times_s, float)
+
+    def bearing(tt: np.ndarray) -> np.ndarray:
+        d = sc.truth(tt)[:, :2] - sc.observer_pos(tt)
+        return np.rad2deg(np.arctan2(d[:, 0], d[:, 1]))
+
+    def heading(tt: np.ndarray) -> np.ndarray:
+        v = sc.observer.state(tt)[1]
+        return np.rad2deg(np.arctan2(v[:, 0], v[:, 1]))
+
+    def change(f: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        return (f(t + 0.5 * window_s) - f(t - 0.5 * window_s) + 180.0) % 360.0 - 180.0
+
+    rel = (bearing(t) - heading(t) + 180.0) % 360.0 - 180.0
+    return {"bearing_sweep_deg": change(bearing), "heading_sweep_deg": change(heading),
+            "cone_deg": np.abs(rel)}
+
+
 def summarise(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """RMSE against time over the seeds and the pooled product errors.
+    """RMSE against time over the seeds and the product errors, pooled and by segment.
 
     Returns
     -------
     dict
         ``time_min`` (K,); ``rmse_{bot,spl}_m`` (K,) over the seeds
-        (:func:`arrayproc.evaluate.accuracy.rmse`); ``level_err_{mean,std}_db`` and
-        ``bearing_err_{bias,std}_deg`` pooled over rows and seeds, with the same for each
-        seed's mean (``*_seed_std``: the spread of the per-seed biases) and the per-row
-        95th percentiles of the absolute errors; the mean bearing error and its spread at
-        each time; ``true_side`` of the first seed (+1 starboard, −1 port).
+        (:func:`arrayproc.evaluate.accuracy.rmse`) and the median final errors;
+        ``level_err_*``/``bearing_err_*``: the mean (bias) and standard deviation pooled over
+        rows and seeds, the mean over the seeds at each time (``*_mean_by_time``), the
+        residual standard deviation about it (``*_residual_std``: the part that changes from
+        seed to seed), the 95th percentile of the absolute error; ``segments``: the same
+        mean/std for each part of :data:`SEGMENTS`; ``sweeps``: :func:`integration_sweeps`.
     """
     t = runs[0]["time"]
     if any(r["time"].shape != t.shape or np.any(r["time"] != t) for r in runs):
@@ -241,36 +275,56 @@ def summarise(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         e = np.stack([r[f"err_{label}_m"] for r in runs])
         out[f"rmse_{label}_m"] = rmse(e).tolist()
         out[f"median_final_error_{label}_m"] = float(np.median(e[:, -1]))
-    lev = np.stack([r["level_err_db"] for r in runs])
-    brg = np.stack([r["bearing_err_deg"] for r in runs])
-    out.update(level_err_mean_db=float(lev.mean()), level_err_std_db=float(lev.std()),
-               level_err_seed_mean_std_db=float(lev.mean(axis=1).std()),
-               level_err_abs_p95_db=float(np.percentile(np.abs(lev), 95)),
-               level_err_mean_by_time_db=lev.mean(axis=0).tolist(),
-               bearing_err_bias_deg=float(brg.mean()), bearing_err_std_deg=float(brg.std()),
-               bearing_err_seed_mean_std_deg=float(brg.mean(axis=1).std()),
-               bearing_err_abs_p95_deg=float(np.percentile(np.abs(brg), 95)),
-               bearing_err_mean_by_time_deg=brg.mean(axis=0).tolist(),
-               bearing_err_std_by_time_deg=brg.std(axis=0).tolist(),
-               snr_db_median=float(np.median(np.stack([r["snr_db"] for r in runs]))),
-               true_side=np.stack([r["true_side"] for r in runs])[0].tolist())
+    errs = {"level_err": (np.stack([r["level_err_db"] for r in runs]), "db"),
+            "bearing_err": (np.stack([r["bearing_err_deg"] for r in runs]), "deg")}
+    tmin = t / 60.0
+    out["segments"] = {}
+    for name, (e, unit) in errs.items():
+        m = e.mean(axis=0)
+        out.update({f"{name}_mean_{unit}": float(e.mean()), f"{name}_std_{unit}": float(e.std()),
+                    f"{name}_residual_std_{unit}": float((e - m).std()),
+                    f"{name}_abs_p95_{unit}": float(np.percentile(np.abs(e), 95)),
+                    f"{name}_mean_by_time_{unit}": m.tolist(),
+                    f"{name}_std_by_time_{unit}": e.std(axis=0).tolist()})
+        for seg, (lo, hi) in SEGMENTS.items():
+            sel = (tmin >= lo) & (tmin < hi)
+            d = out["segments"].setdefault(seg, {"rows": int(sel.sum())})
+            d[f"{name}_mean_{unit}"] = float(e[:, sel].mean())
+            d[f"{name}_std_{unit}"] = float(e[:, sel].std())
+            d[f"{name}_max_abs_mean_{unit}"] = float(np.abs(m[sel]).max())
+    out["snr_db_median"] = float(np.median(np.stack([r["snr_db"] for r in runs])))
+    out["true_side"] = np.asarray(runs[0]["true_side"]).tolist()
+    out["sweeps"] = {k: v.tolist() for k, v in integration_sweeps(t).items()}
     return out
 
 
 def measurement_level(runs: int, particles: int, seed: int,
                       sigma_bearing_deg: float | None = None,
-                      sigma_level_db: float | None = None, bearing_bias_deg: float = 0.0,
-                      level_bias_db: float = 0.0) -> dict[str, Any]:
+                      sigma_level_db: float | None = None,
+                      offsets: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                      ) -> dict[str, Any]:
     """The paper's measurement-level Monte Carlo of the manoeuvring scenario (section 5.1,
-    :func:`~arrayproc.evaluate.scenarios.spl_paper.rpf_monte_carlo`), with the data σ's of
-    the paper (1.5°, 4 dB) or the given ones, plus constant biases if given (added to every
-    bearing and level); the filter keeps the paper's σ_θ and σ_l.
+    :func:`~arrayproc.evaluate.scenarios.spl_paper.rpf_monte_carlo`): bearings eq. (8) and
+    levels eq. (15) with the data σ's of the paper (1.5°, 4 dB) or the given ones, plus, with
+    ``offsets``, a deterministic error at each time; the filter keeps the paper's σ_θ = 1.5°
+    and σ_l = 10 dB.
+
+    Parameters
+    ----------
+    runs, particles, seed
+        Monte Carlo runs, particles of the RPF, root seed.
+    sigma_bearing_deg, sigma_level_db : float, optional
+        Standard deviations of the white errors of the data (default the paper's).
+    offsets : (time_s, bearing_deg, level_db), optional
+        Errors added to every run's bearings and levels, interpolated linearly onto the
+        scenario's measurement times (held at the end values outside): the mean errors of the
+        recordings' products at their row times (:func:`summarise`).
 
     Returns
     -------
     dict
         ``time_min`` (K,), ``rmse_{bot,spl}_m`` (K,), ``sigma_bearing_deg``,
-        ``sigma_level_db`` (of the data).
+        ``sigma_level_db`` (of the data), ``offsets`` (bool).
     """
     from arrayproc.evaluate.scenarios.spl_paper import get_scenario, rpf_monte_carlo
 
@@ -285,16 +339,60 @@ def measurement_level(runs: int, particles: int, seed: int,
         b = np.rad2deg(true_bearing(d[:, 0], d[:, 1]))
         data.bearings_deg = (b + sigma_bearing_deg * rng.standard_normal(
             data.bearings_deg.shape)) % 360.0
-    data.bearings_deg = (data.bearings_deg + bearing_bias_deg) % 360.0
-    data.levels_db = data.levels_db + level_bias_db
+    if offsets is not None:
+        t_off, b_off, l_off = (np.asarray(x, float) for x in offsets)
+        data.bearings_deg = (data.bearings_deg + np.interp(data.times, t_off, b_off)) % 360.0
+        data.levels_db = data.levels_db + np.interp(data.times, t_off, l_off)
     res = rpf_monte_carlo(sc, data, tab, particles, seed)
     return {"runs": runs, "particles": particles, "seed": seed,
             "sigma_bearing_deg": float(sc.sigma_bearing_deg if sigma_bearing_deg is None
                                        else sigma_bearing_deg),
-            "sigma_level_db": float(sc.sigma_level_data_db),
-            "bearing_bias_deg": float(bearing_bias_deg), "level_bias_db": float(level_bias_db),
+            "sigma_level_db": float(sc.sigma_level_data_db), "offsets": offsets is not None,
             "time_min": (sc.times / 60.0).tolist(), "rmse_bot_m": res["rmse_bot"].tolist(),
             "rmse_spl_m": res["rmse_spl"].tolist()}
+
+
+def known_side_errors(products_path: str, particles: int, seed: int) -> dict[str, np.ndarray]:
+    """Diagnostic: the same products and RPF without the left-right hypotheses, fed the
+    member of each port/starboard pair nearer the truth (the unambiguous bearings the paper's
+    measurement model has). Observer states from the scenario's legs
+    (:func:`~arrayproc.evaluate.scenarios.spl_paper.get_scenario` ``manoeuvring``, the
+    recording's navigation), truth likewise.
+
+    Returns
+    -------
+    dict
+        ``time`` (K,) s and ``err_{bot,spl}_m`` (K,) position errors.
+    """
+    from arrayproc.config import parse_toml
+    from arrayproc.evaluate.scenarios.spl_paper import get_scenario
+    from arrayproc.track.single import check_single_config, track_bearings
+
+    sc = get_scenario("manoeuvring")
+    g = read_products(products_path)["bearings"]
+    t = np.asarray(g["time"], float)
+    snr = np.asarray(g["snr_db"], float)
+    order = np.lexsort((-snr, t))
+    keep = order[np.r_[True, t[order][1:] != t[order][:-1]]]
+    t = t[keep]
+    pos, vel = sc.observer.state(t)[:2]
+    own = np.hstack([pos, vel])
+    truth = sc.truth(t)
+    d = truth[:, :2] - pos
+    b_true = np.arctan2(d[:, 0], d[:, 1])
+    pair = np.deg2rad(np.stack([np.asarray(g["bearing_port_deg"], float)[keep],
+                                np.asarray(g["bearing_stbd_deg"], float)[keep]], axis=1))
+    miss = np.abs(np.angle(np.exp(1j * (pair - b_true[:, None]))))
+    z = np.angle(np.exp(1j * pair[np.arange(t.size), np.argmin(miss, axis=1)]))
+    out: dict[str, np.ndarray] = {"time": t}
+    for label, levels in (("bot", False), ("spl", True)):
+        cfg = check_single_config(parse_toml(tracker_toml(levels, particles, seed),
+                                             "known side")["tracker"], "known side")
+        cfg.update(lr=False, side="starboard")
+        lev = np.asarray(g["spl_db"], float)[keep] if levels else None
+        xs, _, _, _ = track_bearings(t, z[:, None], own, cfg, lev)
+        out[f"err_{label}_m"] = np.hypot(*(xs[:, :2] + pos - truth[:, :2]).T)
+    return out
 
 
 def cached_seed(seed: int, workdir: str, duration: float | None = None,
@@ -315,9 +413,12 @@ def cached_seed(seed: int, workdir: str, duration: float | None = None,
 
 
 def plot_rmse(res: dict[str, Any], path: str) -> None:
-    """Position RMSE against time: the recordings' tracks (bearings only, with levels), the
-    measurement-level Monte Carlo with the paper's σ's and with the measured ones, and the
-    paper's fig. 3 values (:data:`~arrayproc.evaluate.scenarios.spl_paper.PAPER`)."""
+    """Top: position RMSE against time of the recordings' tracks (bearings only, with
+    levels), of the measurement-level Monte Carlo (the paper's σ's; the recordings' mean
+    errors and residual σ's; the residual σ's alone) and the paper's fig. 3 values
+    (:data:`~arrayproc.evaluate.scenarios.spl_paper.PAPER`). Bottom: the products' mean
+    bearing and level errors against time with the bearing and heading sweeps of one
+    integration."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -325,28 +426,52 @@ def plot_rmse(res: dict[str, Any], path: str) -> None:
 
     from arrayproc.evaluate.scenarios.spl_paper import PAPER
 
-    fig, ax = plt.subplots(figsize=(8.0, 5.0))
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(12.0, 9.0), sharex=True,
+                                 gridspec_kw={"height_ratios": [3, 2]})
     n = len(res["seeds"])
+    mcs = (("measurement_level_paper", "--", "paper σ"),
+           ("measurement_level_recording", ":", "rec. mean errors + residual σ"),
+           ("measurement_level_residual", "-.", "rec. residual σ only"))
     for label, col in (("bot", "tab:blue"), ("spl", "tab:red")):
         name = "BOT" if label == "bot" else "BOT+SPL"
-        ax.plot(res["time_min"], res[f"rmse_{label}_m"], "-o", color=col, ms=3,
+        ax.plot(res["time_min"], res[f"rmse_{label}_m"], "-o", color=col, ms=3, lw=2,
                 label=f"recording {name} ({n} seeds)")
-        for key, ls, what in (("measurement_level_paper", "--", "paper σ"),
-                              ("measurement_level_measured", ":", "measured σ")):
+        if f"rmse_known_side_{label}_m" in res:
+            ax.plot(res["time_min"], res[f"rmse_known_side_{label}_m"], "-x", color=col,
+                    ms=4, lw=0.8, label=f"recording {name}, true side of each pair")
+        for key, ls, what in mcs:
             mc = res.get(key)
             if mc:
-                ax.plot(mc["time_min"], mc[f"rmse_{label}_m"], ls, color=col,
-                        label=f"measurement-level {name}, {what} ({mc['runs']} runs)")
+                ax.plot(mc["time_min"], mc[f"rmse_{label}_m"], ls, color=col, lw=1,
+                        label=f"meas. level {name}, {what} ({mc['runs']} runs)")
         pts = list(PAPER["manoeuvring"].values())
         ax.plot([p[0] for p in pts], [p[1 if label == "bot" else 2] for p in pts], "*",
-                color=col, ms=12, mec="k", label=f"paper fig. 3 {name}")
-    ax.axvspan(13.0, 17.0, color="0.9", zorder=0, label="observer turn")
+                color=col, ms=13, mec="k", ls="none", label=f"paper fig. 3 {name}")
+    for a in (ax, bx):
+        a.axvspan(13.0, 17.0, color="0.9", zorder=0)
+        a.grid(True, which="both", alpha=0.3)
     ax.set_yscale("log")
-    ax.set_xlabel("time (min)")
     ax.set_ylabel("position RMSE (m)")
-    ax.set_title("SPL paper, manoeuvring observer: RPF from recordings vs measurement level")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="lower left")
+    ax.set_title("SPL paper, manoeuvring observer (turn shaded): RPF from recordings")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0))
+    tm = np.asarray(res["time_min"])
+    bx.plot(tm, res["bearing_err_mean_by_time_deg"], "-o", ms=3, color="tab:green",
+            label="bearing error, mean over seeds (deg)")
+    bx.plot(tm, res["level_err_mean_by_time_db"], "-s", ms=3, color="tab:purple",
+            label="level error spl_db − (SL − TL), mean over seeds (dB)")
+    bx.axhline(0.0, color="k", lw=0.5)
+    bx.set_ylabel("error (deg or dB)")
+    bx.set_xlabel("time (min)")
+    cx = bx.twinx()
+    sw = res["sweeps"]
+    cx.plot(tm, np.abs(sw["bearing_sweep_deg"]), "--", color="0.4",
+            label="|true bearing change| in one 60-s integration (deg)")
+    cx.plot(tm, np.abs(sw["heading_sweep_deg"]), ":", color="0.2",
+            label="|heading change| in one 60-s integration (deg)")
+    cx.set_ylabel("change in one integration (deg)")
+    h1, l1 = bx.get_legend_handles_labels()
+    h2, l2 = cx.get_legend_handles_labels()
+    bx.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)

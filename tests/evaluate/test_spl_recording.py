@@ -5,6 +5,7 @@ bearings only and with spl_db), scored against the simulator's truth."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from arrayproc.config import parse_toml
 from arrayproc.evaluate.spl_recording import run_seed, summarise, tracker_toml
@@ -36,3 +37,58 @@ def test_short_recording_products_and_tracks(tmp_path):
         assert e[-1] < e[0] < 6000.0
     s = summarise([r])
     assert abs(s["level_err_mean_db"]) < 0.4 and s["bearing_err_std_deg"] < 0.1
+    assert s["segments"]["first leg (0-13 min)"]["rows"] == 4
+
+
+def _recordings(tmp_path_factory, n: int = 8) -> dict:
+    from arrayproc.evaluate.spl_recording import measurement_level
+
+    wd = str(tmp_path_factory.mktemp("spl"))
+    s = summarise([run_seed(seed, wd, particles=5000) for seed in range(1, n + 1)])
+    s["mc_paper"] = measurement_level(300, 5000, 1)
+    s["mc_recording"] = measurement_level(
+        300, 5000, 1, sigma_bearing_deg=s["bearing_err_residual_std_deg"],
+        sigma_level_db=s["level_err_residual_std_db"],
+        offsets=(s["time_s"], s["bearing_err_mean_by_time_deg"], s["level_err_mean_by_time_db"]))
+    return s
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory):
+    return _recordings(tmp_path_factory)
+
+
+def _final(s: dict, mc: dict, label: str) -> tuple[float, float]:
+    """The recording's RMSE at its last row (29.5 min) and the Monte Carlo's there."""
+    t = s["time_min"][-1]
+    return s[f"rmse_{label}_m"][-1], float(np.interp(t, mc["time_min"], mc[f"rmse_{label}_m"]))
+
+
+@pytest.mark.slow
+def test_recording_errors_explain_its_rmse(recordings):
+    """Eight full recordings: on the straight first leg the products are within a fraction of
+    the paper's σ's (levels 0.1 ± 0.2 dB, bearings −0.13 ± 0.04° measured on 50 seeds); the
+    measurement-level Monte Carlo given the recordings' mean errors at each time and their
+    residual σ reproduces the recordings' final RMSE within 30 % for both filters."""
+    s = recordings
+    leg = s["segments"]["first leg (0-13 min)"]
+    assert abs(leg["level_err_mean_db"]) < 0.3 and leg["level_err_std_db"] < 0.3
+    assert abs(leg["bearing_err_mean_deg"]) < 0.25 and leg["bearing_err_std_deg"] < 0.1
+    assert s["level_err_residual_std_db"] < 0.2 and s["bearing_err_residual_std_deg"] < 0.5
+    for label in ("bot", "spl"):
+        rec, mc = _final(s, s["mc_recording"], label)
+        assert abs(rec / mc - 1.0) < 0.3, (label, rec, mc)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="measured on 50 recordings (docs/validation/"
+                   "spl_recording.md): final RMSE bearings-only 1.5x the paper-σ Monte "
+                   "Carlo's (bearing errors of -0.6° mean, up to -1.3°, on the second leg: "
+                   "the 60-s integration sweeps 10-14° of bearing there), with levels 1.2x "
+                   "(level errors down to -2.5 dB on that leg)")
+def test_recording_matches_measurement_level(recordings):
+    """Target: from recordings, both filters' final RMSE within 20 % of the measurement-level
+    Monte Carlo with the paper's σ's."""
+    for label in ("bot", "spl"):
+        rec, mc = _final(recordings, recordings["mc_paper"], label)
+        assert rec <= 1.2 * mc, (label, rec, mc)
