@@ -264,7 +264,8 @@ def summarise(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         rows and seeds, the mean over the seeds at each time (``*_mean_by_time``), the
         residual standard deviation about it (``*_residual_std``: the part that changes from
         seed to seed), the 95th percentile of the absolute error; ``segments``: the same
-        mean/std for each part of :data:`SEGMENTS`; ``sweeps``: :func:`integration_sweeps`.
+        mean/std for each part of :data:`SEGMENTS` that has rows; ``sweeps``:
+        :func:`integration_sweeps`.
     """
     t = runs[0]["time"]
     if any(r["time"].shape != t.shape or np.any(r["time"] != t) for r in runs):
@@ -288,6 +289,8 @@ def summarise(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
                     f"{name}_std_by_time_{unit}": e.std(axis=0).tolist()})
         for seg, (lo, hi) in SEGMENTS.items():
             sel = (tmin >= lo) & (tmin < hi)
+            if not sel.any():  # a shortened run: the segment has no rows
+                continue
             d = out["segments"].setdefault(seg, {"rows": int(sel.sum())})
             d[f"{name}_mean_{unit}"] = float(e[:, sel].mean())
             d[f"{name}_std_{unit}"] = float(e[:, sel].std())
