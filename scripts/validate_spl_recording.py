@@ -9,7 +9,10 @@ for ``--seeds`` seeds (each recording deleted once processed; per-seed results a
 products kept in ``--workdir``), scored against the simulator's truth; the same products
 through the RPF with the true side of each bearing pair (no left-right hypotheses); the
 measurement-level Monte Carlo with the paper's σ's, with the recordings' mean errors and
-residual σ's, and with the residual σ's alone (:mod:`arrayproc.evaluate.spl_recording`).
+residual σ's, with the residual σ's alone, with the bearing error of the arrival's elevation
+alone, with the level errors alone and with all the mean errors but the elevation's; one
+recording (``--check-seed``) processed
+with 60-, 20- and 10-s integrations (:mod:`arrayproc.evaluate.spl_recording`).
 
     python scripts/validate_spl_recording.py --seeds 20 --workdir /tmp/spl \
         --json docs/results/spl_recording.json --figure docs/figures/spl_recording_rmse.png
@@ -29,6 +32,7 @@ def main() -> None:
     from arrayproc.evaluate.accuracy import rmse
     from arrayproc.evaluate.spl_recording import (
         cached_seed,
+        integration_check,
         known_side_errors,
         measurement_level,
         plot_rmse,
@@ -42,6 +46,8 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=5000)
     ap.add_argument("--mc-runs", type=int, default=1000, help="measurement-level runs")
     ap.add_argument("--workdir", default="/tmp/spl_recording")
+    ap.add_argument("--check-seed", type=int, default=1,
+                    help="seed of the integration-time check (60, 20, 10 s); -1: none")
     ap.add_argument("--json", default=None)
     ap.add_argument("--figure", default=None)
     a = ap.parse_args()
@@ -67,6 +73,24 @@ def main() -> None:
     out["measurement_level_residual"] = measurement_level(
         a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
         sigma_level_db=out["level_err_residual_std_db"])
+    zero = [0.0] * len(out["time_s"])
+    out["measurement_level_elevation_only"] = measurement_level(   # bearing offsets only
+        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
+        sigma_level_db=out["level_err_residual_std_db"],
+        offsets=(out["time_s"], out["sweeps"]["elevation_bearing_err_deg"], zero))
+    rest = [m - e for m, e in zip(out["bearing_err_mean_by_time_deg"],
+                                  out["sweeps"]["elevation_bearing_err_deg"])]
+    out["measurement_level_without_elevation"] = measurement_level(  # all but the elevation's
+        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
+        sigma_level_db=out["level_err_residual_std_db"],
+        offsets=(out["time_s"], rest, out["level_err_mean_by_time_db"]))
+    out["measurement_level_level_bias_only"] = measurement_level(   # level offsets only
+        a.mc_runs, a.particles, 1, sigma_bearing_deg=out["bearing_err_residual_std_deg"],
+        sigma_level_db=out["level_err_residual_std_db"],
+        offsets=(out["time_s"], zero, out["level_err_mean_by_time_db"]))
+    if a.check_seed >= 0:
+        out["integration_check"] = {"seed": a.check_seed, "snapshots": integration_check(
+            a.check_seed, a.workdir, (60, 20, 10), a.duration)}
     text = json.dumps(out, indent=1)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as f:
@@ -77,11 +101,14 @@ def main() -> None:
             "bearing_err_mean_deg", "bearing_err_std_deg", "bearing_err_residual_std_deg",
             "median_final_error_bot_m", "median_final_error_spl_m", "segments")
     print(json.dumps({k: out[k] for k in keys}, indent=1))
+    if "integration_check" in out:
+        print(json.dumps(out["integration_check"], indent=1))
     for k in ("time_min", "rmse_bot_m", "rmse_spl_m", "rmse_known_side_bot_m",
               "rmse_known_side_spl_m"):
         print(k, " ".join(f"{v:.0f}" if k != "time_min" else f"{v:.1f}" for v in out[k]))
     for key in ("measurement_level_paper", "measurement_level_recording",
-                "measurement_level_residual"):
+                "measurement_level_residual", "measurement_level_elevation_only",
+                "measurement_level_level_bias_only", "measurement_level_without_elevation"):
         for lab in ("bot", "spl"):
             print(key, lab, " ".join(f"{v:.0f}" for v in out[key][f"rmse_{lab}_m"]))
 

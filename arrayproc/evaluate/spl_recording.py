@@ -41,7 +41,8 @@ from arrayproc.io.recording import Recording
 __all__ = ["SCENARIO", "CHAIN", "TL_NAME", "recording_truth", "true_bearings",
            "true_received_level", "product_errors", "tracker_toml", "run_seed",
            "summarise", "measurement_level", "cached_seed", "plot_rmse",
-           "integration_sweeps", "SEGMENTS", "known_side_errors"]
+           "integration_sweeps", "SEGMENTS", "known_side_errors",
+           "integration_check"]
 
 SCENARIO = "tma_spl_paper"
 CHAIN = "spl_tma"
@@ -226,11 +227,23 @@ SEGMENTS = {"first leg (0-13 min)": (0.0, 13.0), "turn (13-17 min)": (13.0, 17.0
 
 
 def integration_sweeps(times_s: np.ndarray, window_s: float = 60.0) -> dict[str, np.ndarray]:
-    """How far the geometry moves during one integration window centred on each row time:
-    the change of the true bearing and of the array heading over [t − w/2, t + w/2] (deg),
-    and the true cone angle at t (deg from the array's forward axis), from the scenario's
-    tracks (:func:`~arrayproc.evaluate.scenarios.spl_paper.get_scenario` ``manoeuvring``, the
-    same legs as ``tma_spl_paper.toml``)."""
+    """The geometry of each row, from the scenario's tracks
+    (:func:`~arrayproc.evaluate.scenarios.spl_paper.get_scenario` ``manoeuvring``, the same
+    legs as ``tma_spl_paper.toml``).
+
+    A horizontal line array measures the cone angle θ_c between its axis and the arrival,
+    cos θ_c = cos β cos φ (β the horizontal relative bearing, φ the arrival's elevation,
+    tan φ = Δz / r for the straight path between the depths); read as a horizontal bearing
+    (heading ∓ θ_c) it is off by ``elevation_bearing_err_deg``.
+
+    Returns
+    -------
+    dict
+        ``bearing_sweep_deg``, ``heading_sweep_deg``: the change of the true bearing and of
+        the array heading over [t − w/2, t + w/2] (deg); ``cone_deg``: |β| at t (deg);
+        ``elevation_deg``: φ (deg); ``elevation_bearing_err_deg``: the bearing error the
+        elevation alone gives (deg).
+    """
     from arrayproc.evaluate.scenarios.spl_paper import get_scenario
 
     sc = get_scenario("manoeuvring")
@@ -248,8 +261,12 @@ def integration_sweeps(times_s: np.ndarray, window_s: float = 60.0) -> dict[str,
         return (f(t + 0.5 * window_s) - f(t - 0.5 * window_s) + 180.0) % 360.0 - 180.0
 
     rel = (bearing(t) - heading(t) + 180.0) % 360.0 - 180.0
+    r = np.hypot(*(sc.truth(t)[:, :2] - sc.observer_pos(t)).T)
+    phi = np.arctan2(sc.observer_depth_m - sc.target_depth_m, r)
+    cone = np.rad2deg(np.arccos(np.cos(np.deg2rad(rel)) * np.cos(phi)))
     return {"bearing_sweep_deg": change(bearing), "heading_sweep_deg": change(heading),
-            "cone_deg": np.abs(rel)}
+            "cone_deg": np.abs(rel), "elevation_deg": np.rad2deg(phi),
+            "elevation_bearing_err_deg": np.sign(rel) * (cone - np.abs(rel))}
 
 
 def summarise(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
@@ -398,6 +415,53 @@ def known_side_errors(products_path: str, particles: int, seed: int) -> dict[str
     return out
 
 
+def integration_check(seed: int, workdir: str, snapshots: Sequence[int] = (60, 10),
+                      duration: float | None = None) -> dict[int, dict[str, Any]]:
+    """Diagnostic: one recording processed with the ``spl_tma`` chain and with copies of it
+    integrating fewer 1-s snapshots, each scored by :func:`product_errors` (mean and
+    standard deviation of the bearing and level errors per segment of :data:`SEGMENTS`), to
+    see how the errors scale with the integration time.
+
+    Returns
+    -------
+    dict
+        snapshots → {segment → {``rows``, ``bearing_err_mean_deg``, ``bearing_err_std_deg``,
+        ``level_err_mean_db``, ``level_err_std_db``}}.
+    """
+    os.makedirs(workdir, exist_ok=True)
+    rec = os.path.join(workdir, f"rec_check_{seed}.h5")
+    pipeline.simulate(str(data_path("scenarios", f"{SCENARIO}.toml")), rec, duration=duration,
+                      seed=seed)
+    text = data_path("chains", f"{CHAIN}.toml").read_text(encoding="utf-8")
+    if "snapshots = 60" not in text:
+        raise ValueError(f"chain {CHAIN}: no 'snapshots = 60' to change")
+    out: dict[int, dict[str, Any]] = {}
+    try:
+        truth = recording_truth(rec)
+        tab = load_default_table(TL_NAME)
+        for n in snapshots:
+            chain = os.path.join(workdir, f"chain_{n}.toml")
+            Path(chain).write_text(text.replace("snapshots = 60", f"snapshots = {int(n)}"),
+                                   encoding="utf-8")
+            prod = os.path.join(workdir, f"products_check_{seed}_{n}.h5")
+            pipeline.process(rec, chain, prod)
+            e = product_errors(prod, truth, tab)
+            tmin = e["time"] / 60.0
+            out[int(n)] = {}
+            for seg, (lo, hi) in SEGMENTS.items():
+                sel = (tmin >= lo) & (tmin < hi)
+                if sel.any():
+                    b, lv = e["bearing_err_deg"][sel], e["level_err_db"][sel]
+                    out[int(n)][seg] = {"rows": int(sel.sum()),
+                                        "bearing_err_mean_deg": float(b.mean()),
+                                        "bearing_err_std_deg": float(b.std()),
+                                        "level_err_mean_db": float(lv.mean()),
+                                        "level_err_std_db": float(lv.std())}
+    finally:
+        Path(rec).unlink(missing_ok=True)
+    return out
+
+
 def cached_seed(seed: int, workdir: str, duration: float | None = None,
                 particles: int = 5000, log: Callable[[str], None] | None = None
                 ) -> dict[str, Any]:
@@ -460,6 +524,10 @@ def plot_rmse(res: dict[str, Any], path: str) -> None:
     tm = np.asarray(res["time_min"])
     bx.plot(tm, res["bearing_err_mean_by_time_deg"], "-o", ms=3, color="tab:green",
             label="bearing error, mean over seeds (deg)")
+    if "elevation_bearing_err_deg" in res["sweeps"]:
+        bx.plot(tm, res["sweeps"]["elevation_bearing_err_deg"], "-", lw=3, alpha=0.4,
+                color="tab:olive", label="bearing error of the arrival's elevation "
+                "(cone angle read as bearing, deg)")
     bx.plot(tm, res["level_err_mean_by_time_db"], "-s", ms=3, color="tab:purple",
             label="level error spl_db − (SL − TL), mean over seeds (dB)")
     bx.axhline(0.0, color="k", lw=0.5)
