@@ -35,9 +35,9 @@ def main() -> None:
         integration_check,
         known_side_errors,
         measurement_level,
-        plot_rmse,
         summarise,
     )
+    from arrayproc.evaluate.spl_recording_plot import plot_rmse
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20, help="recordings (seeds first-seed, ...)")
