@@ -106,3 +106,12 @@ def test_recording_matches_measurement_level(recordings):
     for label in ("bot", "spl"):
         rec, mc = _final(recordings, recordings["mc_paper"], label)
         assert rec <= 1.2 * mc, (label, rec, mc)
+
+
+def test_shipped_trackers_are_the_evaluated_ones():
+    """arrayproc/data/trackers/rpf_{spl,bot}.toml hold the tracker the evaluation runs."""
+    from arrayproc.data import data_path
+
+    for name, levels in (("rpf_spl", True), ("rpf_bot", False)):
+        text = data_path("trackers", f"{name}.toml").read_text(encoding="utf-8")
+        assert parse_toml(text, name) == parse_toml(tracker_toml(levels, 5000, 0), name)
