@@ -23,9 +23,10 @@ __all__ = ["process", "simulate", "tma", "track"]
 
 
 def simulate(scenario: str, output: str, duration: float | None = None,
-             warn: Callable[[str], None] | None = None) -> str:
-    """``arrayproc simulate SCENARIO -o OUTPUT [--duration S]``; returns ``output``."""
-    simulate_file(scenario, output, duration=duration, warn=warn)
+             warn: Callable[[str], None] | None = None, seed: int | None = None) -> str:
+    """``arrayproc simulate SCENARIO -o OUTPUT [--duration S] [--seed N]``; returns
+    ``output``."""
+    simulate_file(scenario, output, seed=seed, duration=duration, warn=warn)
     return output
 
 
