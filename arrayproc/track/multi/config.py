@@ -16,7 +16,7 @@ __all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_mu
 
 MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
               "hit_window",
-              "pd", "clutter_density", "bearing", "contacts", "positions", "lines"}
+              "pd", "clutter_density", "bearing", "contacts", "positions", "lines", "fused"}
 
 
 def _f(default: float, doc: str) -> Param:
@@ -86,6 +86,20 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
         "q": _f(0.01, "acceleration noise, m²/s³"),
         "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
     },
+    "fused": {
+        "sigma_bearing_deg": _f(1.0, "azimuth σ of every array's rows, deg"),
+        "q": _f(0.01, "acceleration noise of the Cartesian CV state, m²/s³"),
+        "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
+        "pair_s": _f(4.0, "largest time between the two bearings of an initiating "
+                     "cross-fix, s"),
+        "min_cross_deg": _f(10.0, "rays crossing at less than this (or more than 180° − "
+                            "this) start no track, deg"),
+        "max_range_m": _f(10000.0, "cross-fixes farther than this from either array start no "
+                          "track, m"),
+        "merge_deg": _f(4.0, "rows of a scan closer than this (azimuth) are one measurement, "
+                        "deg"),
+        "merge_d2": _f(4.0, "d² (positions) under which two confirmed tracks are duplicates"),
+    },
 }
 
 
@@ -127,7 +141,7 @@ def _prob(strict_top: bool) -> Any:
 MANAGER_PARAMS = Schema({
     "measurements": Param("str", "bearings", "what the tracks are made of",
                           choices=("bearings", "lines+bearings", "lines", "contacts",
-                                   "positions")),
+                                   "positions", "fused_bearings")),
     "association": Param("str", "gnn", "global nearest neighbour or joint probabilistic data "
                          "association", choices=("gnn", "jpda")),
     "gate_prob": Param("float", 0.999, "P_G of the χ² gate", check=_prob(True)),
