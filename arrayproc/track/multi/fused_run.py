@@ -75,7 +75,9 @@ def run_fused(products_paths: Sequence[str], config_path: str, out_path: str,
     sites = np.stack([a["xy"] for a in arrays])
     prods = "\n".join(os.path.abspath(a["products"]) for a in arrays)
     recs = "\n".join(a["recording"] for a in arrays)
-    write_tracks(out_path, tracks, rows, config_path, prods, cfg, tma_cfg,
+    # the tracks' own filter is the EKF of the Cartesian state (no TMA filter per track)
+    write_tracks(out_path, tracks, rows, config_path, prods, cfg,
+                 dict(tma_cfg, filter="ekf", lr=False),
                  root_attrs={"recording": recs, "products": prods},
                  array_x_m=sites[:, 0], array_y_m=sites[:, 1])
     return tracks
