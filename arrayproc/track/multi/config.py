@@ -87,18 +87,22 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
         "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
     },
     "fused": {
-        "sigma_bearing_deg": _f(1.0, "azimuth σ of every array's rows, deg"),
-        "q": _f(0.01, "acceleration noise of the Cartesian CV state, m²/s³"),
-        "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
-        "pair_s": _f(4.0, "largest time between the two bearings of an initiating "
-                     "cross-fix, s"),
-        "min_cross_deg": _f(10.0, "rays crossing at less than this (or more than 180° − "
-                            "this) start no track, deg"),
-        "max_range_m": _f(10000.0, "cross-fixes farther than this from either array start no "
-                          "track, m"),
-        "merge_deg": _f(4.0, "rows of a scan closer than this (azimuth) are one measurement, "
-                        "deg"),
-        "merge_d2": _f(4.0, "d² (positions) under which two confirmed tracks are duplicates"),
+        "sigma_bearing_deg": Param("float", 1.0, "azimuth σ of every array's rows",
+                                   check=positive, unit="deg"),
+        "q": Param("float", 0.01, "acceleration noise of the Cartesian CV state",
+                   check=positive, unit="m²/s³"),
+        "sigma_speed_mps": Param("float", 5.0, "initial speed σ per axis", check=positive,
+                                 unit="m/s"),
+        "pair_s": Param("float", 4.0, "largest time between the two bearings of an "
+                        "initiating cross-fix", check=positive, unit="s"),
+        "min_cross_deg": Param("float", 10.0, "rays crossing at less than this (or more than "
+                               "180° − this) start no track", check=positive, unit="deg"),
+        "max_range_m": Param("float", 10000.0, "cross-fixes farther than this from either "
+                             "array start no track", check=positive, unit="m"),
+        "merge_deg": Param("float", 4.0, "rows of a scan closer than this (azimuth) are one "
+                           "measurement", check=positive, unit="deg"),
+        "merge_d2": Param("float", 4.0, "d² (positions) under which two confirmed tracks "
+                          "are duplicates", check=positive),
     },
 }
 
