@@ -88,6 +88,7 @@ Config (``[tracker]`` keys beside those of single mode)::
     max_range_m = 10000.0
     merge_deg = 4.0
     merge_d2 = 4.0
+    persist = 4                   # a persistent free bearing may pair with a taken one
 """
 
 from arrayproc.track.multi.bearings import bearing_scans, cone_filter, track_cones

@@ -103,6 +103,10 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
                            "measurement", check=positive, unit="deg"),
         "merge_d2": Param("float", 4.0, "d² (positions) under which two confirmed tracks "
                           "are duplicates", check=positive),
+        "persist": Param("int", 4, "a free bearing with this many free bearings of its array "
+                         "within merge_deg over the last 4 pair_s (itself included) may also "
+                         "pair with a bearing a track took (0: never)",
+                         check=lambda v: None if v >= 0 else "must be an integer >= 0"),
     },
 }
 

@@ -22,7 +22,12 @@ Association (GNN or JPDA), M-of-N confirmation and deletion are the manager's pa
 a free bearing of another array within that time starts a tentative track at the two rays'
 intersection (:func:`cross_fix_point`), unless the rays cross at less than ``min_cross_deg``
 (near-parallel: the fix is ill-conditioned) or meet behind an array or beyond
-``max_range_m``.
+``max_range_m``. Two vessels seen by two arrays give ghost crossings (array A's ray to one
+vessel with array B's to the other); a track started on one takes a true bearing of each
+array and would leave the other vessel's bearings of one array without a free partner for
+good. So a *persistent* free bearing (``persist`` free bearings of its array within
+``merge_deg`` over the last ``4 pair_s``, which clutter rarely makes) may also pair with a
+recent bearing of another array that a track took.
 """
 
 from __future__ import annotations
@@ -102,8 +107,9 @@ def cross_fix_point(a: np.ndarray, ba: float, b: np.ndarray, bb: float, sigma: f
 class CrossFixInitiator:
     """The manager's initiator (module doc): ``init(Z, t, ctx, j)`` of a free bearing
     ``Z[j, 0]`` (rad) seen from ``ctx.own[:2]``; the state at ``t`` from the cross-fix with
-    the latest kept free bearing of another array (its age Δt adds (σ_v Δt)² per axis), or
-    None (the bearing is kept).
+    the latest kept free bearing of another array (its age Δt adds (σ_v Δt)² per axis),
+    else, for a persistent bearing (module doc), with the latest bearing of another array a
+    track took; or None (the bearing is kept). :meth:`observe` after each scan.
 
     Parameters
     ----------
@@ -117,30 +123,63 @@ class CrossFixInitiator:
         self.pair_s = float(fcfg["pair_s"])
         self.min_cross = math.radians(float(fcfg["min_cross_deg"]))
         self.max_range = float(fcfg["max_range_m"])
-        #: free bearings kept: (t, site (2,), bearing rad)
+        self.persist = int(fcfg["persist"])
+        self.persist_s = 4.0 * self.pair_s
+        self.near = math.radians(float(fcfg["merge_deg"]))
+        #: free bearings kept: (t, site (2,), bearing rad); every recent free bearing; the
+        #: bearings that were in a track's gate (:meth:`observe`)
         self.kept: list[tuple[float, np.ndarray, float]] = []
+        self.free: list[tuple[float, np.ndarray, float]] = []
+        self.seen: list[tuple[float, np.ndarray, float]] = []
+        self.asked: set[int] = set()
 
     def __call__(self, Z: np.ndarray, t: float, ctx: Context, j: int
                  ) -> tuple[np.ndarray, np.ndarray] | None:
         site = np.asarray(ctx.own, float)[:2]
         beta = float(Z[j, 0])
+        self.asked.add(j)
         self.kept = [k for k in self.kept if t - k[0] <= self.pair_s]
-        for i in range(len(self.kept) - 1, -1, -1):  # the latest first
-            tk, sk, bk = self.kept[i]
-            if np.hypot(*(sk - site)) < SAME_SITE_M:
-                continue
-            fix = cross_fix_point(site, beta, sk, bk, self.sigma, self.min_cross,
-                                  self.max_range)
-            if fix is None:
-                continue
-            del self.kept[i]
-            p, C = fix
-            P = np.zeros((4, 4))
-            P[:2, :2] = C + (self.sv * (t - tk)) ** 2 * np.eye(2)
-            P[2:, 2:] = self.sv * self.sv * np.eye(2)
-            return np.r_[p, 0.0, 0.0], P
+        self.seen = [k for k in self.seen if t - k[0] <= self.pair_s]
+        self.free = [k for k in self.free if t - k[0] <= self.persist_s]
+        self.free.append((t, site, beta))
+        pools = [(self.kept, True)]
+        if self.persist and self._persistent(site, beta):
+            pools.append((self.seen, False))
+        for pool, consume in pools:
+            for i in range(len(pool) - 1, -1, -1):  # the latest first
+                tk, sk, bk = pool[i]
+                if np.hypot(*(sk - site)) < SAME_SITE_M:
+                    continue
+                fix = cross_fix_point(site, beta, sk, bk, self.sigma, self.min_cross,
+                                      self.max_range)
+                if fix is None:
+                    continue
+                if consume:
+                    del pool[i]
+                p, C = fix
+                P = np.zeros((4, 4))
+                P[:2, :2] = C + (self.sv * (t - tk)) ** 2 * np.eye(2)
+                P[2:, 2:] = self.sv * self.sv * np.eye(2)
+                return np.r_[p, 0.0, 0.0], P
         self.kept.append((t, site, beta))
         return None
+
+    def _persistent(self, site: np.ndarray, beta: float) -> bool:
+        """``persist`` or more free bearings of this array within ``merge_deg`` of ``beta``
+        over the last ``persist_s`` (this one included): a source no track explains."""
+        n = sum(1 for _t, s, b in self.free if np.hypot(*(s - site)) < SAME_SITE_M
+                and abs(math.remainder(b - beta, 2 * math.pi)) <= self.near)
+        return n >= self.persist
+
+    def observe(self, t: float, ctx: Context, Z: np.ndarray) -> None:
+        """After the manager's step over the scan ``Z`` (rad): keep its bearings not offered
+        to the initiator (those in a track's gate) as partners of later persistent free
+        bearings of other arrays (a track started on a ghost crossing, which takes a true
+        bearing of each array, must not block the true track for good)."""
+        site = np.asarray(ctx.own, float)[:2]
+        self.seen.extend((t, site, float(Z[j, 0])) for j in range(Z.shape[0])
+                         if j not in self.asked)
+        self.asked = set()
 
 
 def read_fused_array(products_path: str, tma_cfg: dict[str, Any]) -> dict[str, Any]:
@@ -226,7 +265,9 @@ def track_fused(arrays: list[dict[str, Any]], cfg: dict[str, Any]) -> list[Track
     mgr = fused_manager(cfg)
     first: dict[int, int] = {}
     for s, (t, k, Z, _rows) in enumerate(scans):
-        mgr.step(t, Z, Context(np.r_[sites[k], 0.0, 0.0], t=t))
+        ctx = Context(np.r_[sites[k], 0.0, 0.0], t=t)
+        mgr.step(t, Z, ctx)
+        mgr.initiator.observe(t, ctx, Z)
         for tr in mgr.tracks[len(first):]:
             first[tr.id] = s
     for tr in mgr.tracks:
