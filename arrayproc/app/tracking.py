@@ -80,7 +80,8 @@ def tma(products: str | Sequence[str], config: str, output: str,
         multi-target tracker (one solution per confirmed track,
         :mod:`arrayproc.track.batch.per_track`); for ``method = "cross_fix"`` two or more
         products files, one per static array (:mod:`arrayproc.track.batch.cross_fix_run`),
-        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`).
+        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`), or one
+        tracks file of the fused tracker (:mod:`arrayproc.track.batch.cross_fix_fused`).
     config : str
         TMA TOML file (``[tma] method = "bearings" | "bearings_frequency" | "delays" |
         "compact" | "cross_fix" | "auto"``, …).

@@ -89,3 +89,23 @@ def test_two_vessels_twenty_seeds():
         assert v["held"] >= 0.9
         assert lo <= v["nees"] <= hi
     assert r["false_per_seed"] <= 0.5
+
+
+def test_tma_cross_fix_on_one_fused_tracks_file(tmp_path):
+    """``tma -c cross_fix`` on the fused tracks file: one solution per confirmed track, each
+    within 3σ (its covariance) of its vessel's state at the window start."""
+    from arrayproc.evaluate.scenarios.fused_tracker import vessel_truth
+
+    paths = write_fused_case(tmp_path, np.random.default_rng(0))
+    trk, out = str(tmp_path / "t.h5"), str(tmp_path / "tma.h5")
+    _track(paths, FUSED, trk)
+    assert main(["tma", trk, "-c", str(data_path("tma", "cross_fix.toml")), "-o", out,
+                 "-q"]) == 0
+    g = read_products(out)["tma"]
+    X = np.c_[g["x"], g["y"], g["vx"], g["vy"]]
+    assert X.shape[0] == 2
+    for x, t0, C in zip(X, np.asarray(g["t0"]), np.asarray(g["cov"]), strict=True):
+        truth = vessel_truth(np.array([t0]))[:, 0]
+        k = int(np.argmin(np.hypot(*(truth[:, :2] - x[:2]).T)))
+        z = (x - truth[k]) / np.sqrt(np.diag(C))
+        assert np.all(np.abs(z) < 3.0), z
