@@ -262,7 +262,9 @@ def _add_plot(sub: Any) -> None:
 
 def _add_track(sub: Any) -> None:
     s = sub.add_parser("track", help="track targets from a products file's measurements")
-    s.add_argument("products", help="products HDF5 file with the measurements")
+    s.add_argument("products", nargs="+", help="products HDF5 file with the measurements; "
+                   "measurements = \"fused_bearings\": two or more, one per static array, "
+                   "each naming its recording (the array's position)")
     add_config(s, "tracker TOML file")
     add_output(s, "tracks HDF5 file to write")
     add_no_progress(s)
@@ -278,7 +280,8 @@ def _add_tma(sub: Any) -> None:
                    "delays, or a multi-target tracks file (one solution per confirmed track); "
                    "method = \"cross_fix\": two or more products files, one per static "
                    "array, each naming its recording (the array's position), or two such "
-                   "arrays' tracks files (their tracks paired across the arrays)")
+                   "arrays' tracks files (their tracks paired across the arrays), or one tracks "
+                   "file of the fused tracker (one solution per confirmed track)")
     add_config(s, "TMA TOML file")
     add_output(s, "products HDF5 file to write")
     add_no_progress(s)

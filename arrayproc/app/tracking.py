@@ -14,13 +14,16 @@ from arrayproc.errors import ArrayprocError
 from arrayproc.io.atomic import check_output
 
 
-def track(products: str, config: str, output: str, progress: bool = False) -> None:
+def track(products: str | Sequence[str], config: str, output: str,
+          progress: bool = False) -> None:
     """Track targets from a products file's bearings into a tracks file.
 
     Parameters
     ----------
-    products : str
-        Products HDF5 file with a bearings group.
+    products : str or sequence of str
+        Products HDF5 file with a bearings group; for ``measurements = "fused_bearings"``
+        two or more, one per static array, each naming its recording (the array's
+        position, :mod:`arrayproc.track.multi.fused`).
     config : str
         Tracker TOML file.
     output : str
@@ -28,19 +31,26 @@ def track(products: str, config: str, output: str, progress: bool = False) -> No
     progress : bool
         Progress messages on stderr.
     """
-    inputs = [products, config]
-    rec = _products_source(products)
-    if rec is not None:
-        inputs.append(rec)  # the recording whose navigation the tracker reads
+    paths = [products] if isinstance(products, str) else list(products)
+    inputs = [*paths, config]
+    for p in paths:
+        rec = _products_source(p)
+        if rec is not None:
+            inputs.append(rec)  # the recording whose navigation the tracker reads
     check_output(output, inputs)
-    from arrayproc.track.runner import load_tracker_config
+    from arrayproc.track.runner import check_one_input, load_tracker_config
     cfg = load_tracker_config(config)  # configuration errors first, before the products are read
-    if cfg.get("mode") != "multi" or cfg["multi"]["measurements"] == "bearings":
-        check_product_input(products, "the tracker", TRACK_INPUT, empty_ok=True)
+    multi = cfg.get("mode") == "multi"
+    if not (multi and cfg["multi"]["measurements"] == "fused_bearings"):
+        check_one_input(paths, config, cfg)
+    if not multi or cfg["multi"]["measurements"] in ("bearings", "fused_bearings"):
+        for p in paths:
+            check_product_input(p, "the tracker", TRACK_INPUT, empty_ok=True)
     from arrayproc.chain.guard import running
     from arrayproc.track.runner import run_tracker
     with running(f"the tracker of {Path(config).name}"):  # named by the memory guard
-        run_tracker(products, config, output, progress=progress, cfg=cfg)
+        run_tracker(paths if len(paths) > 1 else paths[0], config, output,
+                    progress=progress, cfg=cfg)
 
 
 def _products_source(products: str) -> str | None:
@@ -70,7 +80,8 @@ def tma(products: str | Sequence[str], config: str, output: str,
         multi-target tracker (one solution per confirmed track,
         :mod:`arrayproc.track.batch.per_track`); for ``method = "cross_fix"`` two or more
         products files, one per static array (:mod:`arrayproc.track.batch.cross_fix_run`),
-        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`).
+        or two arrays' tracks files (:mod:`arrayproc.track.batch.cross_fix_tracks`), or one
+        tracks file of the fused tracker (:mod:`arrayproc.track.batch.cross_fix_fused`).
     config : str
         TMA TOML file (``[tma] method = "bearings" | "bearings_frequency" | "delays" |
         "compact" | "cross_fix" | "auto"``, …).

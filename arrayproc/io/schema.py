@@ -271,6 +271,10 @@ _KINDS = [
         "f_hz": _c("Hz", "received frequency of each tonal slot of the track, (n, K); NaN "
                    "empty", False, trailing=_ANY),
         "sigma_f_hz": _c("Hz", "1-sigma of f_hz, (n, K)", False, trailing=_ANY),
+        # fused_bearings tracks (track/multi/fused.py): the array of each point's measurement
+        "array": _c("", "input (array) whose row updated the point, index of the group "
+                    "attributes array_x_m / array_y_m (-1 coasted)", False, "i8"),
+        "meas_azimuth_deg": _c("deg", "azimuth of the measurement used (NaN coasted)", False),
     }),
     Kind("tma", "batch solution", {
         "t0": _c("s", "window start (reference time of the state)"),

@@ -14,12 +14,14 @@ only dispatches, so neither runner imports the other's entry point (no import cy
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from arrayproc.config import read_toml
 from arrayproc.errors import ConfigError
 from arrayproc.track.delays import check_delays_config, run_delays
 from arrayproc.track.multi import check_multi_config, run_multi
+from arrayproc.track.multi.fused_run import run_fused
 from arrayproc.track.single import (  # noqa: F401  (re-exported for callers of the runner)
     _read_bearings,
     assign_by_continuity,
@@ -83,14 +85,28 @@ def load_tracker_config(path: str) -> dict[str, Any]:
     return check_tracker_config(doc.get("tracker"), path)
 
 
-def run_tracker(products_path: str, config_path: str, out_path: str,
+def check_one_input(paths: Sequence[str], config_path: str, cfg: dict[str, Any]) -> None:
+    """ConfigError unless ``paths`` is one products file: only ``measurements =
+    "fused_bearings"`` tracks several arrays' files together."""
+    if len(paths) == 1:
+        return
+    what = (f"tracker.measurements = {cfg['multi']['measurements']!r}"
+            if cfg.get("mode") == "multi" else f"tracker.type = {cfg.get('type', 'single')!r}")
+    raise ConfigError(f"{config_path}: {what} reads one products file; {len(paths)} were "
+                      "given (several static arrays: measurements = 'fused_bearings', e.g. "
+                      "trackers/compact_fused.toml)")
+
+
+def run_tracker(products_path: str | Sequence[str], config_path: str, out_path: str,
                 progress: bool = False, cfg: dict[str, Any] | None = None) -> None:
     """``arrayproc track PRODUCTS.h5 -c TRACKER.toml -o TRACKS.h5``.
 
     Parameters
     ----------
-    products_path : str
-        Products file with ``bearings`` (or ``contacts``, ``positions``, ``delays``) rows.
+    products_path : str or sequence of str
+        Products file with ``bearings`` (or ``contacts``, ``positions``, ``delays``) rows;
+        with ``measurements = "fused_bearings"`` one per static array (two or more), the
+        other trackers refuse several.
     config_path : str
         Tracker TOML.
     out_path : str
@@ -107,6 +123,14 @@ def run_tracker(products_path: str, config_path: str, out_path: str,
     """
     if cfg is None:
         cfg = load_tracker_config(config_path)
+    paths = [products_path] if isinstance(products_path, str) else list(products_path)
+    fused = cfg.get("mode") == "multi" and cfg["multi"]["measurements"] == "fused_bearings"
+    if fused:  # several static arrays in one tracker (arrayproc.track.multi.fused)
+        tma = {k: v for k, v in cfg.items() if k not in ("mode", "multi", "type")}
+        run_fused(paths, config_path, out_path, progress=progress, checked=(cfg["multi"], tma))
+        return
+    check_one_input(paths, config_path, cfg)
+    products_path = paths[0]
     if cfg.get("mode") == "multi" and cfg["multi"]["measurements"] == "delays":
         run_delays(products_path, config_path, out_path, progress=progress, cfg=cfg)
     elif cfg.get("mode") == "multi":  # every target (arrayproc.track.multi)

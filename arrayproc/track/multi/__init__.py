@@ -1,6 +1,6 @@
 """``[tracker] type = "multi"``: every target of a products file held as a track.
 
-Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManager` each:
+The measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManager` each:
 
 - ``bearings`` (towed line array): a bearing / bearing-rate filter per track (nearly
   constant rate, BLK 2001 eq. 6.2.2-12, R from σ_cone / sin θ, the beam widening towards
@@ -25,11 +25,17 @@ Three measurement kinds, one :class:`~arrayproc.track.manage.manager.TrackManage
   candidate bearings (port, starboard); both enter as measurements (``mirror = true``), so a
   ghost track forms on the mirror side and dies when the ownship turns.
 - ``positions`` (compact array): 3-D CV tracks, Kalman filter with each row's ``cov``.
+- ``fused_bearings`` (two or more static compact arrays, one products file each:
+  ``arrayproc track A.h5 B.h5 -c compact_fused.toml``): Cartesian CV tracks [x, y, ẋ, ẏ]
+  in the recordings' local frame, updated by every array's azimuths through the bearing
+  from that array (L-R paper eq. (7)), the arrays' scans in time order, started by the
+  cross-fix of two arrays' free bearings (:mod:`arrayproc.track.multi.fused`).
 
 Config (``[tracker]`` keys beside those of single mode)::
 
     type = "multi"                # (older form: mode = "multi")
     measurements = "bearings"     # bearings | lines+bearings | lines | contacts | positions
+                                  # | fused_bearings
     association = "gnn"           # gnn | jpda
     gate_prob = 0.999             # P_G
     confirm = [3, 5]              # M of N
@@ -73,6 +79,16 @@ Config (``[tracker]`` keys beside those of single mode)::
     [tracker.positions]
     q = 0.01
     sigma_speed_mps = 5.0
+    [tracker.fused]               # fused_bearings
+    sigma_bearing_deg = 1.0
+    q = 0.01                      # m²/s³
+    sigma_speed_mps = 5.0
+    pair_s = 4.0                  # the two bearings of an initiating cross-fix within this
+    min_cross_deg = 10.0          # near-parallel rays start no track
+    max_range_m = 10000.0
+    merge_deg = 4.0
+    merge_d2 = 4.0
+    persist = 4                   # a persistent free bearing may pair with a taken one
 """
 
 from arrayproc.track.multi.bearings import bearing_scans, cone_filter, track_cones
@@ -85,6 +101,8 @@ from arrayproc.track.multi.config import (
     tracker_mode,
 )
 from arrayproc.track.multi.contacts import contact_scans, contacts_manager, drop_twin_births
+from arrayproc.track.multi.fused import CrossFixInitiator, cross_fix_point, track_fused
+from arrayproc.track.multi.fused_run import run_fused
 from arrayproc.track.multi.lines import line_scans, line_table, track_lines
 from arrayproc.track.multi.positions import positions_manager
 from arrayproc.track.multi.run import confirmed_status, multi_target, run_multi
@@ -95,4 +113,5 @@ __all__ = ["run_multi", "tracker_mode", "split_config", "check_multi_config", "m
            "bearing_scans", "cone_filter", "track_cones", "tma_track", "resolved_side",
            "contact_scans", "contacts_manager", "drop_twin_births", "positions_manager",
            "confirmed_status", "compose_manager", "MULTI_KEYS", "SUB_PARAMS",
-           "line_table", "line_scans", "track_lines", "TonalBank", "TonalGNN"]
+           "line_table", "line_scans", "track_lines", "TonalBank", "TonalGNN",
+           "run_fused", "track_fused", "cross_fix_point", "CrossFixInitiator"]

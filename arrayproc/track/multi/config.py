@@ -16,7 +16,7 @@ __all__ = ["MULTI_KEYS", "SUB_PARAMS", "tracker_mode", "split_config", "check_mu
 
 MULTI_KEYS = {"mode", "measurements", "association", "gate_prob", "confirm", "max_misses",
               "hit_window",
-              "pd", "clutter_density", "bearing", "contacts", "positions", "lines"}
+              "pd", "clutter_density", "bearing", "contacts", "positions", "lines", "fused"}
 
 
 def _f(default: float, doc: str) -> Param:
@@ -86,6 +86,28 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
         "q": _f(0.01, "acceleration noise, m²/s³"),
         "sigma_speed_mps": _f(5.0, "initial speed σ per axis, m/s"),
     },
+    "fused": {
+        "sigma_bearing_deg": Param("float", 1.0, "azimuth σ of every array's rows",
+                                   check=positive, unit="deg"),
+        "q": Param("float", 0.01, "acceleration noise of the Cartesian CV state",
+                   check=positive, unit="m²/s³"),
+        "sigma_speed_mps": Param("float", 5.0, "initial speed σ per axis", check=positive,
+                                 unit="m/s"),
+        "pair_s": Param("float", 4.0, "largest time between the two bearings of an "
+                        "initiating cross-fix", check=positive, unit="s"),
+        "min_cross_deg": Param("float", 10.0, "rays crossing at less than this (or more than "
+                               "180° − this) start no track", check=positive, unit="deg"),
+        "max_range_m": Param("float", 10000.0, "cross-fixes farther than this from either "
+                             "array start no track", check=positive, unit="m"),
+        "merge_deg": Param("float", 4.0, "rows of a scan closer than this (azimuth) are one "
+                           "measurement", check=positive, unit="deg"),
+        "merge_d2": Param("float", 4.0, "d² (positions) under which two confirmed tracks "
+                          "are duplicates", check=positive),
+        "persist": Param("int", 4, "a free bearing with this many free bearings of its array "
+                         "within merge_deg over the last 4 pair_s (itself included) may also "
+                         "pair with a bearing a track took (0: never)",
+                         check=lambda v: None if v >= 0 else "must be an integer >= 0"),
+    },
 }
 
 
@@ -127,7 +149,7 @@ def _prob(strict_top: bool) -> Any:
 MANAGER_PARAMS = Schema({
     "measurements": Param("str", "bearings", "what the tracks are made of",
                           choices=("bearings", "lines+bearings", "lines", "contacts",
-                                   "positions")),
+                                   "positions", "fused_bearings")),
     "association": Param("str", "gnn", "global nearest neighbour or joint probabilistic data "
                          "association", choices=("gnn", "jpda")),
     "gate_prob": Param("float", 0.999, "P_G of the χ² gate", check=_prob(True)),

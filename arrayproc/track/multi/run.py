@@ -26,7 +26,7 @@ from arrayproc.track.state import Context
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["multi_target", "run_multi", "confirmed_status", "effective_config"]
+__all__ = ["multi_target", "run_multi", "confirmed_status", "effective_config", "write_tracks"]
 
 
 def _cartesian_rows(tr: Track, nav: Nav | None, ndim: int) -> dict[str, np.ndarray]:
@@ -291,7 +291,7 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     already."""
     import os
 
-    from arrayproc.io.products import ProductsWriter, read_products
+    from arrayproc.io.products import read_products
     from arrayproc.track.single import _read_nav
 
     if checked is None:
@@ -314,12 +314,24 @@ def run_multi(products_path: str, config_path: str, out_path: str,
     if progress:
         n_conf = sum(tr.confirmed_at is not None for tr in tracks)
         _log.info(f"{len(tracks)} tracks, {n_conf} confirmed")
+    write_tracks(out_path, tracks, rows, config_path, str(products_path), cfg, tma_cfg,
+                 root_attrs={"recording": str(rec)})
+
+
+def write_tracks(out_path: str, tracks: list[Track], rows: list[dict[str, np.ndarray]],
+                 config_path: str, source: str, cfg: dict[str, Any], tma_cfg: dict[str, Any],
+                 root_attrs: dict[str, Any] | None = None, **group_attrs: Any) -> None:
+    """Write the multi-target tracker's ``tracks`` group: one row per track per scan of its
+    life, ``rows`` the columns of each track (``track_id`` added, ``status`` coded);
+    ``root_attrs`` and ``group_attrs`` beside the usual ones."""
+    from arrayproc.io.products import ProductsWriter
+
     cfg_text = Path(config_path).read_text(encoding="utf-8", errors="replace")
-    with ProductsWriter(out_path, source=str(products_path), chain=cfg_text,
-                        attrs={"recording": str(rec)}) as w:
+    with ProductsWriter(out_path, source=source, chain=cfg_text,
+                        attrs=dict(root_attrs or {})) as w:
         g = w.group("tracks", "tracks", stage="track", mode="multi",
                     measurements=cfg["measurements"], association=cfg["association"],
-                    filter=tma_cfg["filter"], lr=bool(tma_cfg["lr"]))
+                    filter=tma_cfg["filter"], lr=bool(tma_cfg["lr"]), **group_attrs)
         parts = []
         for tr, r in zip(tracks, rows, strict=True):
             n = r["time"].size
