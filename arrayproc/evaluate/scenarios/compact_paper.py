@@ -25,6 +25,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy.integrate import quad
+from scipy.stats import truncnorm
 
 from arrayproc.evaluate.accuracy import crlb_ratio, rmse
 from arrayproc.track.batch.compact import compact_bearings, cpa_range_heading, solve_compact
@@ -32,7 +34,8 @@ from arrayproc.track.batch.fim import compact_fim, crlb_from_fim, innovation_coe
 
 __all__ = ["SPEED", "HEADING", "DURATION", "DT", "SIGMA", "CORR", "SIGMA_SPEED", "CPAS",
            "CASES", "truth", "ou_noise", "cpa_bounds", "run_case", "fig_1", "SWEEP_BASE",
-           "SWEEPS", "SWEEP_CPAS", "MIN_SPEED", "sweep_bounds", "draw_speed", "sweep_run",
+           "SWEEPS", "SWEEP_CPAS", "MIN_SPEED", "sweep_bounds", "draw_speed",
+           "scale_model_range", "expected_scale_range", "sweep_run",
            "sweep_point", "sweeps"]
 
 SPEED = 7.3
@@ -201,6 +204,44 @@ def draw_speed(rng: np.random.Generator, sigma_speed: float) -> float:
             return v
 
 
+def scale_model_range(d_cpa: float, k: np.ndarray, crlb_known_m: float) -> float:
+    """Range RMSE at the CPA that the exact range-speed scaling predicts.
+
+    Bearings from a static array are unchanged by ``(r, v) → (k r, k v)`` (paper eqs. (1),
+    (3)), so the estimate at the assumed speed is ``k = 7.3/v`` times the one at the true
+    speed v, whose range error n has std ``crlb_known_m``: the error is ``(k − 1) d + k n``.
+
+    Parameters
+    ----------
+    d_cpa : float
+        CPA distance (m).
+    k : array_like
+        Ratios of assumed to true speed, one per run (or quadrature node).
+    crlb_known_m : float
+        Range CRLB with the speed known (m).
+
+    Returns
+    -------
+    float
+        ``√(mean((k − 1)² d² + k² crlb_known²))``.
+    """
+    k = np.asarray(k, float)
+    return float(np.sqrt(np.mean((k - 1) ** 2 * d_cpa**2 + k**2 * crlb_known_m**2)))
+
+
+def expected_scale_range(d_cpa: float, sigma_speed: float, crlb_known_m: float) -> float:
+    """:func:`scale_model_range` averaged over the speed prior of :func:`draw_speed` (the
+    normal N(7.3, σ_v²) truncated at :data:`MIN_SPEED`), by quadrature."""
+    if sigma_speed <= 0:
+        return float(crlb_known_m)
+    dist = truncnorm((MIN_SPEED - SPEED) / sigma_speed, np.inf, loc=SPEED, scale=sigma_speed)
+    lo, hi = max(MIN_SPEED, SPEED - 12 * sigma_speed), SPEED + 12 * sigma_speed
+    m1 = quad(lambda v: ((SPEED / v - 1) * d_cpa) ** 2 * dist.pdf(v), lo, hi, points=[SPEED],
+              limit=200)[0]
+    m2 = quad(lambda v: (SPEED / v) ** 2 * dist.pdf(v), lo, hi, points=[SPEED], limit=200)[0]
+    return float(np.sqrt(m1 + m2 * crlb_known_m**2))
+
+
 def sweep_run(d_cpa: float, setting: dict, rng: np.random.Generator, n_grid: int,
               n_headings: int) -> tuple[float, float, float]:
     """One run of a sweep point: errors of the range at the CPA (m) and of the heading (deg).
@@ -235,21 +276,24 @@ def sweep_point(d_cpa: float, setting: dict, runs: int, seed: np.random.SeedSequ
     -------
     dict
         RMSE, bias, CRLB and RMSE/CRLB of the range at the CPA (m) and of the heading (deg);
-        ``scale_model_range_m``: the range RMSE that the exact range-speed scaling predicts,
-        ``√(mean_i (d (7.3/v_i − 1))² + CRLB_known²)`` over the drawn speeds ``v_i``.
+        ``scale_model_range_m``: the range RMSE that the exact range-speed scaling predicts
+        over the drawn speeds (:func:`scale_model_range`), ``expected_scale_range_m`` the same
+        over the prior (:func:`expected_scale_range`).
     """
     rng = np.random.default_rng(seed)
     out = np.array([sweep_run(d_cpa, setting, rng, n_grid, n_headings) for _ in range(runs)])
     r_err, g_err, v = out.T
     crlb_r, crlb_g = sweep_bounds(d_cpa, setting)
     known_r, _ = sweep_bounds(d_cpa, {**setting, "sigma_speed_mps": 0.0})
-    scale = float(np.sqrt(np.mean((d_cpa * (SPEED / v - 1)) ** 2) + known_r ** 2))
     return {"rmse_range_m": float(rmse(r_err)), "bias_range_m": float(r_err.mean()),
             "rmse_heading_deg": float(rmse(g_err)), "bias_heading_deg": float(g_err.mean()),
             "crlb_range_m": crlb_r, "crlb_heading_deg": crlb_g,
             "ratio_range": float(crlb_ratio(rmse(r_err), crlb_r)),
             "ratio_heading": float(crlb_ratio(rmse(g_err), crlb_g)),
-            "scale_model_range_m": scale, "min_speed_mps": float(v.min()),
+            "scale_model_range_m": scale_model_range(d_cpa, SPEED / v, known_r),
+            "expected_scale_range_m": expected_scale_range(d_cpa, setting["sigma_speed_mps"],
+                                                           known_r),
+            "min_speed_mps": float(v.min()),
             "max_speed_mps": float(v.max())}
 
 
