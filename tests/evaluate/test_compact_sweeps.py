@@ -3,6 +3,9 @@ speed-prior σ_v): the CRLB against its closed forms and a reduced Monte Carlo p
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.stats import chi2
@@ -110,3 +113,53 @@ def test_expected_scale_range_is_the_mean_over_the_drawn_speeds():
     known, _ = cp.sweep_bounds(D, cp.SWEEP_BASE)
     got = cp.scale_model_range(D, cp.SPEED / v, known)
     assert got == pytest.approx(cp.expected_scale_range(D, 1.5, known), rel=0.05)
+
+
+RESULTS = Path(__file__).resolve().parents[2] / "docs" / "results" / "compact_sweeps.json"
+
+
+@pytest.fixture(scope="module")
+def full_sweep():
+    """The documented run: ``reproduce_compact_tma.py --sweeps --runs 100 --grid 50
+    --headings 36 --seed 1`` (about 4.5 min on one core)."""
+    return cp.sweeps(100, 1, cp.SWEEP_CPAS, 50, 36)
+
+
+def _points(res: dict):
+    for d, by_factor in res.items():
+        for name, by_value in by_factor.items():
+            for val, r in by_value.items():
+                yield float(d), name, float(val), r
+
+
+@pytest.mark.slow
+def test_full_sweep_known_speed_points_are_within_25_percent_of_the_crlb(full_sweep):
+    """Every point with the speed known (sweeps of τ, σ, T and σ_v = 0): range and heading
+    RMSE within 25 % of the CRLB, the Fig. 1 analogue's target (measured 0.84-1.24, the
+    highest the range at 3 km observed for 5 min)."""
+    for d, name, val, r in _points(full_sweep):
+        if name != "sigma_speed_mps" or val == 0.0:
+            assert abs(r["ratio_range"] - 1) <= 0.25, (d, name, val, r)
+            assert abs(r["ratio_heading"] - 1) <= 0.25, (d, name, val, r)
+
+
+@pytest.mark.slow
+def test_full_sweep_speed_prior_range_follows_the_scale_model(full_sweep):
+    """With the speed drawn from the prior the range error is the scaling (k − 1) d + k n:
+    the RMSE within 10 % of that model over the drawn speeds (measured within 7 %), while the
+    linearised CRLB falls short once σ_v/v is large (ratio 1.35 and 2.06 at 1 km for
+    σ_v = 1.5 and 3 m/s). The heading keeps its bound up to σ_v = 1.5 m/s (within 25 %)."""
+    for d, name, val, r in _points(full_sweep):
+        if name == "sigma_speed_mps" and val > 0:
+            assert r["rmse_range_m"] == pytest.approx(r["scale_model_range_m"], rel=0.10)
+            if val <= 1.5:
+                assert abs(r["ratio_heading"] - 1) <= 0.25, (d, val, r)
+
+
+@pytest.mark.slow
+def test_full_sweep_reproduces_the_stored_results(full_sweep):
+    stored = json.loads(RESULTS.read_text())["points"]
+    for (d, name, val, r), (_, _, _, s) in zip(_points(full_sweep), _points(stored),
+                                                strict=True):
+        for key, x in r.items():
+            assert x == pytest.approx(s[key], rel=1e-6), (d, name, val, key)
