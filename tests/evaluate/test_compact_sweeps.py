@@ -121,7 +121,7 @@ RESULTS = Path(__file__).resolve().parents[2] / "docs" / "results" / "compact_sw
 @pytest.fixture(scope="module")
 def full_sweep():
     """The documented run: ``reproduce_compact_tma.py --sweeps --runs 100 --grid 50
-    --headings 36 --seed 1`` (about 4.5 min on one core)."""
+    --headings 36 --seed 1`` (measured 179-224 s)."""
     return cp.sweeps(100, 1, cp.SWEEP_CPAS, 50, 36)
 
 
