@@ -6,6 +6,11 @@ against the CRLB; the scenario, the estimator settings and the assumptions (σ =
 are described in :mod:`arrayproc.evaluate.scenarios.compact_paper`. Usage:
 
   python scripts/reproduce_compact_tma.py [--runs 50] [--seed 1] [--json OUT] [--plot DIR]
+  python scripts/reproduce_compact_tma.py --sweeps [--runs 100] [--seed 1] [--json OUT]
+
+``--sweeps`` runs instead the four factor sweeps (correlation interval, bearing σ, observation
+time, speed-prior σ_v) at CPA 1 km and 3 km against the CRLB
+(:func:`arrayproc.evaluate.scenarios.compact_paper.sweeps`).
 """
 
 from __future__ import annotations
@@ -25,7 +30,11 @@ from arrayproc.evaluate.scenarios.compact_paper import (
     DURATION,
     SIGMA,
     SPEED,
+    SWEEP_BASE,
+    SWEEP_CPAS,
+    SWEEPS,
     fig_1,
+    sweeps,
 )
 
 
@@ -79,6 +88,26 @@ def log(case: str, d: float, r: dict) -> None:
               flush=True)
 
 
+def log_sweep(d: float, name: str, val: float, r: dict) -> None:
+    print(f"CPA {d:6.0f} m {name:15s} {val:7g}: range RMSE {r['rmse_range_m']:8.1f} m (CRLB "
+          f"{r['crlb_range_m']:7.1f}, ratio {r['ratio_range']:.2f}, scale model "
+          f"{r['scale_model_range_m']:7.1f}); heading RMSE {r['rmse_heading_deg']:6.2f} deg "
+          f"(CRLB {r['crlb_heading_deg']:5.2f}, ratio {r['ratio_heading']:.2f})", flush=True)
+
+
+def run_sweeps(a: argparse.Namespace) -> int:
+    res = {"runs": a.runs, "seed": a.seed, "cpa_m": list(SWEEP_CPAS), "base": SWEEP_BASE,
+           "sweeps": {k: list(v) for k, v in SWEEPS.items()}, "speed_mps": SPEED, "dt_s": DT,
+           "grid": a.grid, "headings": a.headings}
+    t0 = time.perf_counter()
+    res["points"] = sweeps(a.runs, a.seed, SWEEP_CPAS, a.grid, a.headings, log_sweep)
+    res["wall_s"] = time.perf_counter() - t0
+    print(f"wall time {res['wall_s']:.1f} s", file=sys.stderr)
+    if a.json:
+        Path(a.json).write_text(json.dumps(res, indent=1))
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=50)
@@ -87,7 +116,11 @@ def main() -> int:
     ap.add_argument("--headings", type=int, default=72)
     ap.add_argument("--json", default=None)
     ap.add_argument("--plot", default=None)
+    ap.add_argument("--sweeps", action="store_true",
+                    help="run the four factor sweeps instead of the Fig. 1 analogue")
     a = ap.parse_args()
+    if a.sweeps:
+        return run_sweeps(a)
     res: dict = {"runs": a.runs, "seed": a.seed, "cpa_m": list(CPAS), "speed_mps": SPEED,
                  "sigma_deg": float(np.rad2deg(SIGMA)), "correlation_s": CORR,
                  "duration_s": DURATION, "dt_s": DT, "grid": a.grid, "headings": a.headings,
