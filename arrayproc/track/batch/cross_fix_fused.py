@@ -22,8 +22,7 @@ from arrayproc.io.products import read_products
 from arrayproc.io.schema import groups_of_kind
 from arrayproc.io.text import as_text
 
-from .cross_fix import solve_cross_fix
-from .cross_fix_run import MIN_ROWS, solve_estimated_sigma
+from .cross_fix_run import MIN_ROWS, solve_window
 from .result import TmaSolution
 from .run import load_tma_config, warn_if_far_from, write_tma
 
@@ -81,9 +80,7 @@ def run_cross_fix_fused(tracks_path: str, config_path: str, output_path: str,
         tt, y, site = t[m], np.deg2rad(az[m]), arr[m]
         obs = sites[site]
         w0, w1 = float(tt.min()), float(tt.max())
-        sol = (solve_cross_fix(tt, y, obs, np.deg2rad(cfg["sigma_bearing_deg"]), t0=w0, t1=w1)
-               if cfg["sigma_bearing_deg"] > 0 else solve_estimated_sigma(tt, y, obs, site,
-                                                                          w0, w1))
+        sol = solve_window(tt, y, obs, cfg["sigma_bearing_deg"], site, w0, w1)
         out.append((int(tid), sol))
         warn_if_far_from(sol, sites, cfg, f"cross_fix fused track {tid}")
         if progress:

@@ -75,17 +75,34 @@ def read_array(products_path: str, cfg: dict[str, Any]) -> dict[str, Any]:
         centre's mean position (m), ``recording``, ``products`` and ``group``.
     """
     meas = read_measurements(products_path, dict(cfg, method="cross_fix"))
-    if not meas["source"]:
-        raise FormatError(f"{products_path}: names no recording (root attribute 'source'): "
-                          "the array's position is unknown")
-    rec_path = resolve_beside(meas["source"], products_path)
-    if not os.path.exists(rec_path):
-        raise FormatError(f"{products_path}: its recording {rec_path} does not exist: the "
-                          "array's position is unknown")
+    rec_path = named_recording(products_path, meas["source"])
     t = meas["time"]
     return {"time": t, "bearing": true_bearings(meas, np.ones(t.size, bool), cfg),
             "xy": array_position(products_path, rec_path, t), "recording": rec_path,
             "products": products_path, "group": meas["group"]}
+
+
+def named_recording(where: str, source: str) -> str:
+    """The recording a products or tracks file names (its ``source``), resolved beside the
+    file; FormatError naming ``where`` when it names none or the recording does not exist
+    (the array's position is then unknown)."""
+    if not source:
+        raise FormatError(f"{where}: names no recording (root attribute 'source'): the "
+                          "array's position is unknown")
+    rec_path = resolve_beside(source, where)
+    if not os.path.exists(rec_path):
+        raise FormatError(f"{where}: its recording {rec_path} does not exist: the array's "
+                          "position is unknown")
+    return rec_path
+
+
+def solve_window(t: np.ndarray, y: np.ndarray, obs: np.ndarray, sigma_deg: float,
+                 site: np.ndarray, t0: float, t1: float) -> TmaSolution:
+    """The cross-fix of one window's rows: with the configured σ (deg) when it is > 0, else
+    with each array's σ estimated (:func:`solve_estimated_sigma`)."""
+    if sigma_deg > 0:
+        return solve_cross_fix(t, y, obs, np.deg2rad(sigma_deg), t0=t0, t1=t1)
+    return solve_estimated_sigma(t, y, obs, site, t0, t1)
 
 
 def array_position(where: str, rec_path: str, times: np.ndarray) -> np.ndarray:
@@ -203,7 +220,6 @@ def run_cross_fix(products_paths: list[str], config_path: str, output_path: str,
                 raise FormatError(f"{arrays[i]['products']} and {arrays[j]['products']}: the "
                                   "arrays are at the same position (within 1 m): no cross-fix")
     t_all = np.sort(np.concatenate([a["time"] for a in arrays]))
-    sol_sigma = np.deg2rad(cfg["sigma_bearing_deg"])
     sols = []
     for w0, w1 in _windows(t_all, cfg["window"], cfg["step"]):
         rows = _window_rows(arrays, w0, w1)
@@ -211,8 +227,7 @@ def run_cross_fix(products_paths: list[str], config_path: str, output_path: str,
             continue
         t, y, obs, site = rows
         try:
-            sol = (solve_cross_fix(t, y, obs, sol_sigma, t0=w0, t1=w1) if sol_sigma > 0
-                   else solve_estimated_sigma(t, y, obs, site, w0, w1))
+            sol = solve_window(t, y, obs, cfg["sigma_bearing_deg"], site, w0, w1)
         except (ValueError, np.linalg.LinAlgError) as e:
             raise FormatError(f"window [{w0:g}, {w1:g}] s: {e}") from None
         sols.append(sol)

@@ -31,13 +31,12 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.products import read_products
 from arrayproc.io.text import as_text
 
 from .cross_fix import solve_cross_fix
-from .cross_fix_run import array_position, solve_estimated_sigma
+from .cross_fix_run import array_position, named_recording, solve_estimated_sigma
 from .per_track import read_track_rows
 from .result import TmaSolution
 from .run import true_bearings, warn_if_far_from, write_tma
@@ -58,14 +57,8 @@ def difference_sigma(t: np.ndarray, y: np.ndarray) -> float:
 def _array_tracks(path: str, cfg: dict[str, Any]) -> dict[str, Any]:
     """One tracks file's confirmed tracks (time, bearing, σ) and its array's position."""
     tr = read_track_rows(path, cfg)
-    rec = tr.recording or as_text(read_products(tr.products)["/"].get("source", ""))
-    if not rec:
-        raise FormatError(f"{path}: names no recording (nor does its products file): the "
-                          "array's position is unknown")
-    rec = resolve_beside(rec, path)
-    if not os.path.exists(rec):
-        raise FormatError(f"{path}: its recording {rec} does not exist: the array's position "
-                          "is unknown")
+    rec = named_recording(path, tr.recording or as_text(
+        read_products(tr.products)["/"].get("source", "")))
     tracks = {}
     for tid, m in tr.tracks.items():
         y = true_bearings(m, np.ones(m["time"].size, bool), dict(cfg, method="cross_fix"))

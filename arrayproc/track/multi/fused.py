@@ -38,7 +38,6 @@ from typing import Any
 
 import numpy as np
 
-from arrayproc.config import resolve_beside
 from arrayproc.errors import ConfigError, FormatError
 from arrayproc.io.text import as_text
 from arrayproc.track.batch.cross_fix import _ray_intersection
@@ -200,20 +199,13 @@ def read_fused_array(products_path: str, tma_cfg: dict[str, Any]) -> dict[str, A
         and ``recording``.
     """
     from arrayproc.io.products import read_products
-    from arrayproc.track.batch.cross_fix_run import array_position
+    from arrayproc.track.batch.cross_fix_run import array_position, named_recording
     from arrayproc.track.multi.run import _columns, _group
 
     if not os.path.exists(products_path):
         raise FormatError(f"{products_path}: no such file")
     prod = read_products(products_path)
-    src = as_text(prod["/"].get("source", ""))
-    if not src:
-        raise FormatError(f"{products_path}: names no recording (root attribute 'source'): "
-                          "the array's position is unknown")
-    rec = resolve_beside(src, products_path)
-    if not os.path.exists(rec):
-        raise FormatError(f"{products_path}: its recording {rec} does not exist: the array's "
-                          "position is unknown")
+    rec = named_recording(products_path, as_text(prod["/"].get("source", "")))
     g = _group(prod, "bearings", products_path, tma_cfg.get("bearings"))
     col = "azimuth_deg" if "azimuth_deg" in g else "bearing_stbd_deg"
     b = _columns(g, ("time", col), products_path)
