@@ -125,6 +125,15 @@ def true_received_level(truth: dict[str, Any], t: np.ndarray, tab: TLTable) -> n
     return sl - tab(r, truth["depth"], truth["own_depth"])
 
 
+def _strongest_per_time(products_path: str) -> tuple[Any, np.ndarray]:
+    """The ``bearings`` group and the indices of its strongest row (``snr_db``) per time, in
+    time order."""
+    g = read_products(products_path)["bearings"]
+    t = np.asarray(g["time"], float)
+    order = np.lexsort((-np.asarray(g["snr_db"], float), t))
+    return g, order[np.r_[True, t[order][1:] != t[order][:-1]]]
+
+
 def product_errors(products_path: str, truth: dict[str, Any], tab: TLTable) -> dict[str, Any]:
     """Errors of the bearings rows against the truth, one row per time (the strongest by
     ``snr_db``, the tracker's choice).
@@ -137,12 +146,9 @@ def product_errors(products_path: str, truth: dict[str, Any], tab: TLTable) -> d
         received level; ``snr_db`` (K,); ``true_side`` (K,) +1 when the starboard member is
         the nearer one, −1 port.
     """
-    g = read_products(products_path)["bearings"]
-    t = np.asarray(g["time"], float)
+    g, keep = _strongest_per_time(products_path)
+    t = np.asarray(g["time"], float)[keep]
     snr = np.asarray(g["snr_db"], float)
-    order = np.lexsort((-snr, t))
-    keep = order[np.r_[True, t[order][1:] != t[order][:-1]]]
-    t = t[keep]
     b_true, _, _ = true_bearings(truth, t)
 
     def wrap(a: np.ndarray) -> np.ndarray:
@@ -392,12 +398,8 @@ def known_side_errors(products_path: str, particles: int, seed: int) -> dict[str
     from arrayproc.track.single import check_single_config, track_bearings
 
     sc = get_scenario("manoeuvring")
-    g = read_products(products_path)["bearings"]
-    t = np.asarray(g["time"], float)
-    snr = np.asarray(g["snr_db"], float)
-    order = np.lexsort((-snr, t))
-    keep = order[np.r_[True, t[order][1:] != t[order][:-1]]]
-    t = t[keep]
+    g, keep = _strongest_per_time(products_path)
+    t = np.asarray(g["time"], float)[keep]
     pos, vel = sc.observer.state(t)[:2]
     own = np.hstack([pos, vel])
     truth = sc.truth(t)
