@@ -11,22 +11,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
+from arrayproc.geo.rays import ray_intersection
+
 from .bo_tma import _wrap, bearing_model
 from .fim import bo_fim, bo_jacobian
 from .result import TmaSolution, end_value, finish_solution
-
-
-def _ray_intersection(a: np.ndarray, ba: float, b: np.ndarray, bb: float) -> np.ndarray | None:
-    """Intersection of the rays from ``a`` at bearing ``ba`` and from ``b`` at ``bb`` (rad)."""
-    ua = np.array([np.sin(ba), np.cos(ba)])
-    ub = np.array([np.sin(bb), np.cos(bb)])
-    m = np.column_stack([ua, -ub])
-    if abs(np.linalg.det(m)) < 1e-6:
-        return None
-    ra, rb = np.linalg.solve(m, b - a)
-    if ra <= 0 or rb <= 0:
-        return None
-    return a + ra * ua
 
 
 def _initial_state(t: np.ndarray, y: np.ndarray, obs: np.ndarray, t0: float,
@@ -42,7 +31,7 @@ def _initial_state(t: np.ndarray, y: np.ndarray, obs: np.ndarray, t0: float,
         for s in sites[:2]:
             m = np.all(obs == s, axis=1)
             b.append(end_value(t[m], y[m], at, n_fit=max(10, int(m.sum()) // 10))[0])
-        fixes.append(_ray_intersection(sites[0], b[0], sites[1], b[1]))
+        fixes.append(ray_intersection(sites[0], b[0], sites[1], b[1]))
     if fixes[0] is None or fixes[1] is None:
         c = sites.mean(axis=0)
         return np.array([c[0] + 1000.0, c[1] + 1000.0, 0.0, 0.0])

@@ -39,8 +39,8 @@ from typing import Any
 import numpy as np
 
 from arrayproc.errors import ConfigError, FormatError
+from arrayproc.geo.rays import ray_intersection
 from arrayproc.io.text import as_text
-from arrayproc.track.batch.cross_fix import _ray_intersection
 from arrayproc.track.filters.stacked import StackedEKF
 from arrayproc.track.manage.manager import TrackManager
 from arrayproc.track.manage.tracks import Track
@@ -89,14 +89,14 @@ def cross_fix_point(a: np.ndarray, ba: float, b: np.ndarray, bb: float, sigma: f
     """
     if abs(math.sin(ba - bb)) < math.sin(min_cross_rad):
         return None
-    p = _ray_intersection(a, ba, b, bb)
+    p = ray_intersection(a, ba, b, bb)
     if p is None or max(np.hypot(*(p - a)), np.hypot(*(p - b))) > max_range:
         return None
     h = 1e-6
     J = np.empty((2, 2))
     for k, (da, db) in enumerate(((h, 0.0), (0.0, h))):
-        p1 = _ray_intersection(a, ba + da, b, bb + db)
-        p0 = _ray_intersection(a, ba - da, b, bb - db)
+        p1 = ray_intersection(a, ba + da, b, bb + db)
+        p0 = ray_intersection(a, ba - da, b, bb - db)
         if p1 is None or p0 is None:
             return None
         J[:, k] = (p1 - p0) / (2 * h)
