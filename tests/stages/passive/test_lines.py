@@ -103,9 +103,9 @@ def test_frequency_cone_level_against_truth_and_crlb(tmp_path, rng):
 
 @pytest.mark.parametrize("frac", [0.1, 0.25, 0.4])
 def test_frequency_unbiased_between_bins_at_high_snr(tmp_path, frac):
-    """A strong tone (lines 34 dB over TPSW, median) at 0.1-0.4 bin off the grid: the mean of 40 contacts is
-    within 0.005 bin of the truth (the bare dB parabola's Hann bias was 0.011-0.013 bin here,
-    10 standard errors)."""
+    """A strong tone (lines 34 dB over TPSW, median) at 0.1-0.4 bin off the grid: the mean of
+    40 contacts is within 0.005 bin of the truth (the bare dB parabola's Hann bias was
+    0.011-0.013 bin here, 10 standard errors)."""
     f0 = 300.0 + frac * DF
     x, pos = tonal(NFFT * N_B * 40, [63.4], [f0], [1.0], 1.0, np.random.default_rng(7))
     rows = run_lines(x, pos, tmp_path, threshold_db=12.0)
