@@ -1,21 +1,27 @@
 """Outputs before and after a refactor, compared dataset by dataset.
 
-``--make DIR`` simulates the demo recordings (towed passive, synthetic aperture), imports the
-real six-hydrophone recording when ``../shared`` is beside the checkout, runs every chain in the
-package's ``chains`` folder on every recording it accepts, and tracks the demo's products with
-every tracker file; ``--compare A B`` compares every HDF5 file of A with the file of the same
-name in B: every group, dataset (bit for bit, NaNs equal) and attribute.
+``--make DIR`` simulates every shipped scenario (shortened to ``--duration``) and imports the
+real six-hydrophone recording when ``../shared`` is beside the checkout, runs every shipped chain
+on every recording, every shipped tracker on every products file and every shipped TMA file on
+every products and tracks file, with the package of ``--repo`` (default: this checkout).
+Refusals are part of the outcome: ``DIR/outcomes.json`` keeps each command's exit status.
+``--compare A B`` compares the outcomes and every HDF5 file of A with the file of the same name in
+B: every group, dataset (bit for bit, NaNs equal) and attribute.
 
-    .venv/bin/python scripts/compare_outputs.py --make /tmp/before
-    .venv/bin/python scripts/compare_outputs.py --make /tmp/after
-    .venv/bin/python scripts/compare_outputs.py --compare /tmp/before /tmp/after
+    git worktree add /tmp/before <commit>
+    .venv/bin/python scripts/compare_outputs.py --make /tmp/out_before --repo /tmp/before
+    .venv/bin/python scripts/compare_outputs.py --make /tmp/out_after
+    .venv/bin/python scripts/compare_outputs.py --compare /tmp/out_before /tmp/out_after
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import h5py
@@ -23,48 +29,69 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 XAV = REPO.parent / "shared" / "data" / "xav-large-array"
-EXE = [sys.executable, "-m", "arrayproc"]  # the package on sys.path (PYTHONPATH wins)
 
 
-def data_dir() -> Path:
-    for d in (REPO / "arrayproc" / "data", REPO / "data"):
+def data_dir(repo: Path) -> Path:
+    for d in (repo / "arrayproc" / "data", repo / "data"):
         if (d / "chains").is_dir():
             return d
-    raise SystemExit("no chains folder found")
+    raise SystemExit(f"no chains folder found in {repo}")
 
 
-def run(args: list[str]) -> bool:
-    p = subprocess.run([*EXE, *args, *(["--no-progress"] if args[0] in
-                                       ("simulate", "process", "track") else [])],
-                       capture_output=True, text=True)
-    status = "ok" if p.returncode == 0 else f"exit {p.returncode}: {p.stderr.strip()[-200:]}"
-    print(f"$ arrayproc {' '.join(args)}  [{status}]", flush=True)
-    return p.returncode == 0
+class Runner:
+    """Runs ``arrayproc`` from one checkout and keeps every command's outcome."""
+
+    def __init__(self, repo: Path, jobs: int) -> None:
+        self.env = {**os.environ, "PYTHONPATH": str(repo)}
+        self.jobs = jobs
+        self.outcomes: dict[str, str] = {}
+
+    def one(self, key: str, args: list[str]) -> bool:
+        quiet = ["--no-progress"] if args[0] in ("simulate", "process", "track") else []
+        p = subprocess.run([sys.executable, "-m", "arrayproc", *args, *quiet],
+                           capture_output=True, text=True, env=self.env)
+        err = (p.stderr.strip().splitlines() or [""])[-1][:160]
+        status = "ok" if p.returncode == 0 else f"exit {p.returncode}: {err}"
+        self.outcomes[key] = "ok" if p.returncode == 0 else f"exit {p.returncode}"
+        print(f"{key}  [{status}]", flush=True)
+        return p.returncode == 0
+
+    def many(self, runs: dict[str, list[str]]) -> list[str]:
+        """Run every command (``jobs`` at once); the keys of those that succeeded."""
+        with ThreadPoolExecutor(self.jobs) as pool:
+            ok = dict(zip(runs, pool.map(lambda kv: self.one(*kv), runs.items())))
+        return [k for k, v in ok.items() if v]
 
 
-def make(out: Path) -> None:
-    data = data_dir()
+def make(out: Path, repo: Path, duration: float, jobs: int) -> None:
+    """Every shipped scenario simulated, processed by every chain, tracked, TMA-solved."""
+    data = data_dir(repo)
     out.mkdir(parents=True, exist_ok=True)
-    recs = {}
-    for name, dur in (("towed_passive", "120"), ("towed_synthetic_aperture", "120")):
-        rec = out / f"rec_{name}.h5"
-        if run(["simulate", str(data / "scenarios" / f"{name}.toml"), "-o", str(rec),
-                "--duration", dur, "-q"]):
-            recs[name] = rec
+    r = Runner(repo, jobs)
+    sims = {f"rec_{s.stem}.h5": ["simulate", str(s), "-o", str(out / f"rec_{s.stem}.h5"),
+                                 "--duration", f"{duration:g}", "-q"]
+            for s in sorted((data / "scenarios").glob("*.toml"))}
     if XAV.is_dir():
-        rec = out / "rec_xav.h5"
-        wavs = sorted(str(p) for p in XAV.glob("AMAR173.*.wav"))
-        if run(["import", *wavs, "--geometry", str(XAV / "hydrophones_config_07-HI.csv"),
-                "--sound-speed", "1484", "-o", str(rec), "-q"]):
-            recs["xav"] = rec
-    for chain in sorted((data / "chains").glob("*.toml")):
-        for name, rec in recs.items():
-            prod = out / f"prod_{name}__{chain.stem}.h5"
-            if run(["process", str(rec), "-c", str(chain), "-o", str(prod), "-q"]) and \
-                    name == "towed_passive" and chain.stem == "towed_passive":
-                for tr in sorted((data / "trackers").glob("*.toml")):
-                    run(["track", str(prod), "-c", str(tr), "-o",
-                         str(out / f"tracks_{name}__{tr.stem}.h5")])
+        sims["rec_xav.h5"] = ["import", *sorted(str(p) for p in XAV.glob("AMAR173.*.wav")),
+                              "--geometry", str(XAV / "hydrophones_config_07-HI.csv"),
+                              "--sound-speed", "1484", "-o", str(out / "rec_xav.h5"), "-q"]
+    recs = r.many(sims)
+    procs = {f"prod_{rec[4:-3]}__{c.stem}.h5":
+             ["process", str(out / rec), "-c", str(c),
+              "-o", str(out / f"prod_{rec[4:-3]}__{c.stem}.h5"), "-q"]
+             for rec in recs for c in sorted((data / "chains").glob("*.toml"))}
+    prods = r.many(procs)
+    tracks = {f"tracks_{p[5:-3]}__{t.stem}.h5":
+              ["track", str(out / p), "-c", str(t),
+               "-o", str(out / f"tracks_{p[5:-3]}__{t.stem}.h5"), "-q"]
+              for p in prods for t in sorted((data / "trackers").glob("*.toml"))}
+    done = r.many(tracks)
+    tmas = {f"tma_{f.split('_', 1)[1][:-3]}__{c.stem}.h5":
+            ["tma", str(out / f), "-c", str(c),
+             "-o", str(out / f"tma_{f.split('_', 1)[1][:-3]}__{c.stem}.h5"), "-q"]
+            for f in [*prods, *done] for c in sorted((data / "tma").glob("*.toml"))}
+    r.many(tmas)
+    (out / "outcomes.json").write_text(json.dumps(r.outcomes, indent=1, sort_keys=True))
 
 
 def _items(f: h5py.File) -> dict[str, object]:
@@ -119,10 +146,24 @@ def compare_files(pa: Path, pb: Path) -> list[str]:
     return diffs
 
 
+def compare_outcomes(a: Path, b: Path) -> int:
+    """Commands whose exit status changed (present in both runs); their count."""
+    if not ((a / "outcomes.json").is_file() and (b / "outcomes.json").is_file()):
+        return 0
+    oa = json.loads((a / "outcomes.json").read_text())
+    ob = json.loads((b / "outcomes.json").read_text())
+    changed = [k for k in sorted(set(oa) & set(ob)) if oa[k] != ob[k]]
+    for k in changed:
+        print(f"{k}: {oa[k]} -> {ob[k]}")
+    print(f"{len(set(oa) & set(ob))} commands in both runs, {len(changed)} changed outcome, "
+          f"{len(set(ob) - set(oa))} only in B")
+    return len(changed)
+
+
 def compare(a: Path, b: Path) -> int:
+    bad = compare_outcomes(a, b)
     fa = {p.name for p in a.glob("*.h5")}
     fb = {p.name for p in b.glob("*.h5")}
-    bad = 0
     for name in sorted(fa | fb):
         if name not in fa or name not in fb:
             print(f"{name}: only in {'A' if name in fa else 'B'}")
@@ -133,20 +174,23 @@ def compare(a: Path, b: Path) -> int:
         for line in d[:20]:
             print("   ", line)
         bad += bool(d)
-    both = len(fa & fb)
-    print(f"{len(fa | fb)} files, {both} in both, {bad} differ "
-          f"({len(fb - fa)} only in B: chains or trackers that A does not have)")
+    print(f"{len(fa | fb)} files, {len(fa & fb)} in both, "
+          f"{sum(bool(compare_files(a / n, b / n)) for n in fa & fb)} of them differ "
+          f"({len(fb - fa)} only in B: chains, trackers or scenarios that A does not have)")
     return 1 if bad else 0
 
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     g = p.add_mutually_exclusive_group(required=True)
-    g.add_argument("--make", metavar="DIR")
-    g.add_argument("--compare", nargs=2, metavar=("A", "B"))
+    g.add_argument("--make", metavar="DIR", help="write every output here")
+    g.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two --make folders")
+    p.add_argument("--repo", type=Path, default=REPO, help="checkout whose package runs")
+    p.add_argument("--duration", type=float, default=60.0, help="scenario length, s")
+    p.add_argument("--jobs", type=int, default=2, help="commands run at once")
     a = p.parse_args()
     if a.make:
-        make(Path(a.make))
+        make(Path(a.make), a.repo.resolve(), a.duration, a.jobs)
         return 0
     return compare(Path(a.compare[0]), Path(a.compare[1]))
 
