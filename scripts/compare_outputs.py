@@ -136,7 +136,7 @@ def _attrs_diff(where: str, a: h5py.AttributeManager, b: h5py.AttributeManager,
 def compare_files(pa: Path, pb: Path) -> list[str]:
     diffs: list[str] = []
     # paths of the inputs and the software version may differ between two checkouts
-    ignore = {"source", "software_version", "chain_path", "config_path", "recording"}
+    ignore = {"source", "software_version", "chain_path", "config_path", "recording", "products"}
     with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
         diffs += _attrs_diff("/", fa.attrs, fb.attrs, ignore)
         ia, ib = _items(fa), _items(fb)
