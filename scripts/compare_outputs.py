@@ -7,7 +7,9 @@ every products and tracks file, with the package of ``--repo`` (default: this ch
 Refusals are part of the outcome: ``DIR/outcomes.json`` keeps each command's exit status; an
 output already in DIR is kept, and ``--like A`` runs only the commands that the run in A ran.
 ``--compare A B`` compares the outcomes and every HDF5 file of A with the file of the same name in
-B: every group, dataset (bit for bit, NaNs equal) and attribute.
+B: every group, dataset (bit for bit, NaNs equal) and attribute. A file whose only difference is
+the embedded configuration text (the root ``chain`` attribute) is reported as such and does not
+fail the comparison; a changed exit status, a difference in data or a file only in A does.
 
     git worktree add /tmp/before <commit>
     .venv/bin/python scripts/compare_outputs.py --make /tmp/out_before --repo /tmp/before
