@@ -38,13 +38,14 @@ def samples(seconds: float, seed: int = 3) -> np.ndarray:
 
 
 def grow_nav(g, t: float) -> None:
-    """Append the track's row at time t (s) to the ``/nav`` datasets."""
+    """Append the track's row at time t (s) to the ``/nav`` datasets, ``time`` written last
+    (a follower counts a row once its time is written)."""
     n = g["time"].shape[0]
     for k in ("time", "position", "heading"):
         g[k].resize(n + 1, axis=0)
-    g["time"][n] = t
     g["position"][n] = (2.0 * t, 0.0)
     g["heading"][n] = (90.0 + 3.0 * t) % 360.0
+    g["time"][n] = t
 
 
 def has_rows(path: str) -> bool:
@@ -74,7 +75,7 @@ def main() -> None:
             track = w._f.create_group("nav")
             for k, shape in (("time", ()), ("position", (2,)), ("heading", ())):
                 track.create_dataset(k, shape=(0,) + shape, maxshape=(None,) + shape,
-                                     dtype=float, chunks=(64,) + shape)
+                                     dtype=float, chunks=(64,) + shape, fillvalue=np.nan)
             grow_nav(track, 0.0)
         w.flush()
         _log.info("ready")  # the follower may open the file now

@@ -199,6 +199,8 @@ class Recording:
         hd = read_numeric(f, p, "nav/heading", required=True).reshape(-1)
         dp = read_numeric(f, p, "nav/depth")
         dp = dp.reshape(-1) if dp is not None else None
+        if self.swmr:
+            t, pos, hd, dp = written_nav_rows(t, pos, hd, dp)
         if t.size == 0:
             raise FormatError(f"{p}: /nav/time is empty")
         if np.any(np.diff(t) <= 0):
@@ -298,7 +300,8 @@ class Recording:
     def refresh(self) -> int:
         """Samples now in the file: re-reads ``/time_data``'s length, which a writer in SWMR
         mode grows (a recording opened with ``swmr=True``; otherwise the length at open), and
-        ``/nav`` when the writer grew it too (all its datasets to one new length)."""
+        ``/nav`` when the writer grew it too (:func:`written_nav_rows`: the rows every one of
+        its datasets holds)."""
         if self.swmr:
             self._td.refresh()
             self.n_samples = int(self._td.shape[0])
@@ -313,10 +316,11 @@ class Recording:
                 if isinstance(g.get(k), h5py.Dataset)]
         for d in sets:
             d.refresh()
-        lengths = {int(d.shape[0]) for d in sets}
-        if len(lengths) == 1 and lengths.pop() != self.nav.time.size:
-            self.nav = self._read_nav()
-            self._static_pose = None
+        if min(int(d.shape[0]) for d in sets) != self.nav.time.size:
+            nav = self._read_nav()
+            if nav.time.size != self.nav.time.size:
+                self.nav = nav
+                self._static_pose = None
 
     def nav_end(self) -> float:
         """Time of the last ``/nav`` row (s); ``inf`` for a static array (one row or none)."""
@@ -349,3 +353,24 @@ class Recording:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def written_nav_rows(t: np.ndarray, pos: np.ndarray, hd: np.ndarray,
+                     dp: np.ndarray | None) -> tuple[np.ndarray, ...]:
+    """The ``/nav`` rows a writer growing the file in SWMR mode has finished.
+
+    A live writer grows ``time``, ``position``, ``heading`` (and ``depth``) one after another,
+    then writes the new row, so a reader can open the file between two of those steps. Only
+    the rows every dataset holds count, and a trailing row whose time is not yet written (the
+    fill value: not after the row before it), or whose other values are not finite (a NaN
+    fill), is left for the next refresh; a writer that writes ``time`` last is never read half
+    way. Rows before it are checked as in a finished file.
+    """
+    m = min(t.shape[0], pos.shape[0], hd.shape[0], dp.shape[0] if dp is not None else t.size)
+
+    def written(i: int) -> bool:
+        rest = [pos[i], hd[i]] + ([dp[i]] if dp is not None else [])
+        return bool(t[i] > t[i - 1] and all(np.all(np.isfinite(v)) for v in rest))
+    while m > 1 and not written(m - 1):
+        m -= 1
+    return t[:m], pos[:m], hd[:m], (dp[:m] if dp is not None else None)

@@ -156,3 +156,47 @@ def test_nan_policy_zero_counts(tmp_path):
     with Recording(p, nan="zero") as r:
         data = np.concatenate([b.data for b in read_blocks(r, 32)])[:100]
         assert r.n_nonfinite == 2 and data[10, 1] == 0 and data[50, 0] == 0
+
+
+def _half_grown_nav(path, lengths: dict, fill_last: bool) -> None:
+    """A live recording whose /nav datasets a writer is growing: ``lengths`` rows each, the
+    last row of the longest ones still the fill value when ``fill_last``."""
+    from arrayproc.io.recording_writer import RecordingWriter
+    pos = np.zeros((2, 3))
+    pos[1, 0] = -1.0
+    with RecordingWriter(path, 1000.0, 2, positions=pos, live=True, chunk_samples=64) as w:
+        w.append(np.zeros((4000, 2), np.float32))
+        g = w._f.create_group("nav")
+        for k, shape in (("time", ()), ("position", (2,)), ("heading", ())):
+            n = lengths[k]
+            d = g.create_dataset(k, shape=(n,) + shape, maxshape=(None,) + shape,
+                                 dtype=float, chunks=(8,) + shape, fillvalue=np.nan)
+            m = n - 1 if fill_last and n == max(lengths.values()) else n
+            if k == "time":
+                d[:m] = np.arange(m, dtype=float)
+            elif k == "position":
+                d[:m] = np.c_[2.0 * np.arange(m), np.zeros(m)]
+            else:
+                d[:m] = 90.0
+
+
+@pytest.mark.parametrize("lengths,fill_last,rows", [
+    ({"time": 3, "position": 4, "heading": 4}, True, 3),    # time not grown yet
+    ({"time": 4, "position": 3, "heading": 4}, False, 3),   # position not grown yet
+    ({"time": 4, "position": 4, "heading": 4}, True, 3),    # grown, last row not written
+    ({"time": 4, "position": 4, "heading": 4}, False, 4),   # a whole row
+])
+def test_follower_reads_the_nav_rows_a_live_writer_finished(tmp_path, lengths, fill_last,
+                                                            rows):
+    """A follower (SWMR reader) opening a recording while its writer is between growing one
+    /nav dataset and the next reads the rows every dataset holds, never a half-written row;
+    a reader of a finished file refuses the same file in one clear line."""
+    p = tmp_path / "rec.h5"
+    _half_grown_nav(p, lengths, fill_last)
+    with Recording(p, swmr=True) as r:
+        assert r.nav.time.size == rows
+        assert np.array_equal(r.nav.time, np.arange(rows, dtype=float))
+        assert np.all(np.isfinite(r.nav.position))
+    if rows == 3:
+        with pytest.raises(FormatError, match="/nav"):
+            Recording(p)
