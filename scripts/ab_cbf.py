@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import io
+import re
 import subprocess
 import sys
 import tarfile
@@ -26,15 +27,28 @@ import numpy as np
 from bench_cbf import BAND, BEAMS, HOP, NFFT, source, time_stage
 
 
-def load_base(rev: str, root: Path, tmp: Path):
-    """The ``arrayproc`` package at ``rev``, importable as ``arrayproc_base``."""
+def extract_base(rev: str, root: Path, tmp: Path) -> str:
+    """Extract the ``arrayproc`` package at ``rev`` into ``tmp``, importable as
+    ``arrayproc_base`` (returned): its absolute imports (``from arrayproc.x import y``) are
+    rewritten to the new name, so that none of its modules resolves to this checkout's
+    package."""
     data = subprocess.run(["git", "archive", rev, "arrayproc"], cwd=root, check=True,
                           capture_output=True).stdout
     with tarfile.open(fileobj=io.BytesIO(data)) as tar:
         tar.extractall(tmp, filter="data")
     (tmp / "arrayproc").rename(tmp / "arrayproc_base")
+    absolute = re.compile(r"(?m)^(\s*)(from|import) arrayproc(?=[.\s])")
+    for f in (tmp / "arrayproc_base").rglob("*.py"):
+        text = f.read_text()
+        f.write_text(absolute.sub(r"\1\2 arrayproc_base", text))
     sys.path.insert(0, str(tmp))
-    for name in ("arrayproc_base.stages.beamform.cbf", "arrayproc_base.stages.cbf"):
+    return "arrayproc_base"
+
+
+def load_base(rev: str, root: Path, tmp: Path):
+    """The ``cbf`` stage module of the package at ``rev`` (:func:`extract_base`)."""
+    pkg = extract_base(rev, root, tmp)
+    for name in (f"{pkg}.stages.beamform.cbf", f"{pkg}.stages.cbf"):
         try:
             return importlib.import_module(name)
         except ModuleNotFoundError:
@@ -42,12 +56,11 @@ def load_base(rev: str, root: Path, tmp: Path):
     raise SystemExit(f"{rev}: no cbf stage found")
 
 
-
 def base_source(base_cbf):
     """The same blocks as :func:`bench_cbf.source` in the base package's own block type: a
     revision from before the typed domains takes a tuple domain and a dict of
     metadata. The repacking costs a few microseconds per 8192-sample block."""
-    mod = sys.modules[base_cbf.__name__.rsplit(".", 2)[0]]
+    mod = sys.modules[base_cbf.__name__.split(".", 1)[0]]  # the top package
     try:
         importlib.import_module(f"{mod.__name__}.chain.domains")
         return source  # the base has typed domains: it reads our blocks as they are

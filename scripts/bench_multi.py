@@ -63,19 +63,23 @@ def scenario(n_targets: int, n_scans: int, clutter: float, seed: int):
     return t, truth, scans
 
 
-def run_ours(t, scans):
-    cfg = {"association": "gnn", "gate_prob": 0.999, "confirm": MofN(3, 5), "max_misses": 5,
+def run_ours(t, scans, manager=contacts_manager, mofn=MofN, own=None,
+             confirmed=Status.CONFIRMED):
+    """Our tracker over the scans: (seconds, final confirmed positions (n, 2), confirmed
+    count). The manager factory, the M-of-N rule, the ownship context and the confirmed
+    status may come from another copy of the package (``scripts/ab_multi.py``)."""
+    cfg = {"association": "gnn", "gate_prob": 0.999, "confirm": mofn(3, 5), "max_misses": 5,
            "pd": 0.9, "clutter_density": 1e-6,
            "contacts": {"sigma_bearing_deg": math.degrees(SIG[0]), "sigma_range_m": SIG[1],
                         "sigma_range_rate_mps": SIG[2], "q": Q, "sigma_speed_mps": 5.0,
                         "mirror": False}}
-    own = Context(np.zeros(4))
-    mgr = contacts_manager(cfg)
+    own = Context(np.zeros(4)) if own is None else own
+    mgr = manager(cfg)
     t0 = time.perf_counter()
     for tk, Z in zip(t, scans, strict=True):
         mgr.step(float(tk), Z, own)
     el = time.perf_counter() - t0
-    final = [tr.x[:2] for tr in mgr.tracks if tr.status is Status.CONFIRMED]
+    final = [tr.x[:2] for tr in mgr.tracks if tr.status is confirmed]
     n_conf = sum(tr.confirmed_at is not None for tr in mgr.tracks)
     return el, np.array(final).reshape(-1, 2), n_conf
 
