@@ -29,7 +29,7 @@ from bench_cbf import BAND, BEAMS, HOP, NFFT, source, time_stage
 
 def extract_base(rev: str, root: Path, tmp: Path) -> str:
     """Extract the ``arrayproc`` package at ``rev`` into ``tmp``, importable as
-    ``arrayproc_base`` (returned): its absolute imports (``from arrayproc.x import y``) are
+    ``arrayproc_base`` (returned): its absolute imports (``from arrayproc.io import h5``, say) are
     rewritten to the new name, so that none of its modules resolves to this checkout's
     package."""
     data = subprocess.run(["git", "archive", rev, "arrayproc"], cwd=root, check=True,
