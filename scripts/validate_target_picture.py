@@ -25,9 +25,12 @@ def main() -> None:
     ap.add_argument("--scenario", action="append", choices=sorted(SCENARIOS),
                     help="run only these (repeatable; default all)")
     ap.add_argument("--duration", type=float, default=None, help="shorten each run, s")
+    ap.add_argument("--seeds", type=int, default=1,
+                    help="noise draws per scenario (seed offsets 0, 100, ...; default 1)")
     a = ap.parse_args()
     names = a.scenario or list(SCENARIOS)
-    res = evaluate(names, os.path.abspath(a.out), jobs=a.jobs, duration=a.duration)
+    res = evaluate(names, os.path.abspath(a.out), jobs=a.jobs, duration=a.duration,
+                   seeds=a.seeds)
     out = {"scenarios": res, "summary": summary(res)}
     if a.json:
         with open(a.json, "w") as fh:

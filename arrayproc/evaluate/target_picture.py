@@ -30,6 +30,7 @@ the recording's ``/truth``:
 from __future__ import annotations
 
 import os
+import re
 import time
 import warnings
 from collections.abc import Sequence
@@ -281,16 +282,32 @@ def score_scenario(name: str, run: dict[str, Any]) -> dict[str, Any]:
             "n_warnings": len(run["warnings"])}
 
 
-def _one(args: tuple[str, str, float | None]) -> dict[str, Any]:
-    name, out_dir, duration = args
-    return score_scenario(name, run_scenario(name, out_dir, duration))
+def reseeded(text: str, offset: int) -> str:
+    """Scenario TOML ``text`` with its top-level ``seed`` increased by ``offset`` (another
+    draw of every noise and fading process; the geometry and levels unchanged)."""
+    if offset == 0:
+        return text
+    m = re.search(r"(?m)^seed = (\d+)$", text)
+    if m is None:
+        raise ValueError("the scenario text has no top-level 'seed = N' line")
+    return text[:m.start()] + f"seed = {int(m.group(1)) + offset}" + text[m.end():]
+
+
+def _one(args: tuple[str, str, float | None, int]) -> dict[str, Any]:
+    name, out_dir, duration, offset = args
+    run = run_scenario(name, out_dir, duration, reseeded(SCENARIOS[name], offset))
+    res = score_scenario(name, run)
+    res["seed_offset"] = offset
+    return res
 
 
 def evaluate(names: Sequence[str], out_dir: str, jobs: int = 1,
-             duration: float | None = None) -> list[dict[str, Any]]:
-    """Run and score the named scenarios (``jobs`` processes at once); one dict each, in
-    order (:func:`score_scenario`)."""
-    args = [(n, out_dir, duration) for n in names]
+             duration: float | None = None, seeds: int = 1) -> list[dict[str, Any]]:
+    """Run and score the named scenarios (``jobs`` processes at once), each on ``seeds``
+    noise draws (seed offsets 0, 100, 200, …; the files of offset k > 0 in ``out_dir/sK``);
+    one dict each (:func:`score_scenario`, with ``seed_offset``), scenario by scenario."""
+    args = [(n, out_dir if k == 0 else os.path.join(out_dir, f"s{100 * k}"), duration,
+             100 * k) for n in names for k in range(seeds)]
     if jobs <= 1:
         return [_one(a) for a in args]
     with ProcessPoolExecutor(max_workers=jobs) as ex:
@@ -299,6 +316,11 @@ def evaluate(names: Sequence[str], out_dir: str, jobs: int = 1,
 
 def _fmt(v: Any, spec: str = "") -> str:
     return "–" if v is None else format(v, spec)
+
+
+def _run_name(res: dict[str, Any]) -> str:
+    off = res.get("seed_offset", 0)
+    return res["scenario"] + (f" (seed +{off})" if off else "")
 
 
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
@@ -313,7 +335,7 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
             ok = s["pass"]
             mark = (lambda b: "" if b else " ✗") if s["eligible"] else (lambda b: "")
             lines.append(
-                f"| {res['scenario'] if k == 0 else ''} | {s['source']} | "
+                f"| {_run_name(res) if k == 0 else ''} | {s['source']} | "
                 f"{_fmt(s['tonal_db'], '.1f')} | {_fmt(s['btr_db'], '.1f')} | "
                 f"{'yes' if s['eligible'] else 'no'} | {100 * s['held']:.0f} %{mark(ok['held'])}"
                 f" | {_fmt(s['line_cone_deg'], '.2f')} | {t.get('method', '–')} | "
@@ -325,10 +347,11 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def summary(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """Counts over the scenarios: sources, eligible ones, and the eligible ones that miss
+    """Counts over the runs (scenarios × seeds): sources, eligible ones, and the eligible ones that miss
     each target; the largest number of false tracks in one scenario."""
     el = [s for r in results for s in r["sources"] if s["eligible"]]
-    return {"sources": sum(len(r["sources"]) for r in results), "eligible": len(el),
+    return {"runs": len(results),
+            "sources": sum(len(r["sources"]) for r in results), "eligible": len(el),
             "held_below_80pct": sum(not s["pass"]["held"] for s in el),
             "tma_beyond_3sigma": sum(not s["pass"]["sigma"] for s in el),
             "range_beyond_25pct": sum(not s["pass"]["range"] for s in el),

@@ -15,6 +15,7 @@ from arrayproc.evaluate.target_picture import (
     SIGMA_MAX,
     evaluate,
     markdown_table,
+    reseeded,
     run_scenario,
     score_scenario,
     summary,
@@ -58,6 +59,21 @@ def test_reduced_scenario_end_to_end(short):
     assert "| short_turn | contact |" in tab and tab.count("\n") == 3
     sm = summary([res])
     assert sm["sources"] == 1 and sm["eligible"] == 1
+
+
+def test_reseeded_changes_the_seed_line_alone():
+    """Another noise draw of a scenario: its top-level seed moves by the offset, every other
+    line stays (geometry, levels, the sources' own keys)."""
+    for name, text in SCENARIOS.items():
+        new = reseeded(text, 200)
+        old_lines, new_lines = text.splitlines(), new.splitlines()
+        diff = [(a, b) for a, b in zip(old_lines, new_lines, strict=True) if a != b]
+        assert len(diff) == 1, name
+        (a, b), = diff
+        assert int(b.split("=")[1]) == int(a.split("=")[1]) + 200
+    assert reseeded(SHORT_TURN, 0) == SHORT_TURN
+    with pytest.raises(ValueError, match="seed"):
+        reseeded("[scenario]\nduration = 10.0\n", 100)
 
 
 def _missed(res, key):
