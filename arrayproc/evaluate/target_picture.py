@@ -347,8 +347,8 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def summary(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """Counts over the runs (scenarios × seeds): sources, eligible ones, and the eligible ones that miss
-    each target; the largest number of false tracks in one scenario."""
+    """Counts over the runs (scenarios × seeds): sources, eligible ones, and the eligible
+    ones that miss each target; the largest number of false tracks in one run."""
     el = [s for r in results for s in r["sources"] if s["eligible"]]
     return {"runs": len(results),
             "sources": sum(len(r["sources"]) for r in results), "eligible": len(el),
