@@ -22,14 +22,14 @@ from arrayproc.evaluate.target_picture import (
 )
 
 #: measured (docs/results/target_picture.json): the acceptance targets not yet reached
-XFAIL_HELD = ("6 of 11 eligible sources held < 80 %: towship_masking abeam 42 %, bow 71 %; "
-              "endfire_turn target 72 %; long_four coaster 40 %, fisher 65 %, tanker 45 % "
-              "(tracks fragment in the turns; tonals under the 12 dB line threshold)")
-XFAIL_FALSE = "long_four has 3 false confirmed tracks (the others 0 or 1)"
-XFAIL_SIGMA = ("3 of 11 eligible sources beyond 3σ: long_four coaster 252σ, fisher 3.69σ, "
-               "tanker 2439σ")
-XFAIL_RANGE = ("4 of 11 eligible sources beyond 25 %: towship_masking abeam +315 %, long_four "
-               "coaster −31 %, fisher +268 %, tanker +8828 %")
+XFAIL_HELD = ("7 of 11 eligible sources held < 80 %: towship_masking abeam 48 %, bow 73 %; "
+              "endfire_turn target 75 %; long_four coaster 46 %, fisher 67 %, submerged 59 %, "
+              "tanker 52 % (sources inside the tow ship's beam; tonals under the 12 dB line "
+              "threshold; a track that diverges at end-fire in a turn)")
+XFAIL_SIGMA = ("4 of 11 eligible sources beyond 3σ: towship_masking abeam 114.7σ, endfire_turn "
+               "target 4.53σ, long_four fisher 8.95σ, tanker 50.1σ")
+XFAIL_RANGE = ("5 of 11 eligible sources beyond 25 %: towship_masking abeam −97 %, quarter −35 %, "
+               "endfire_turn target +28 %, long_four fisher +208 %, tanker −68 %")
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +102,6 @@ def test_five_scenarios_every_eligible_source_held_80pct(five):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=XFAIL_FALSE)
 def test_five_scenarios_at_most_one_false_track(five):
     assert max(len(r["false_tracks"]) for r in five) <= 1, \
         {r["scenario"]: r["false_tracks"] for r in five}

@@ -13,12 +13,16 @@ on the best beam per bin, ``R(f) = max_b r(b, f)``:
 - at most ``max_lines`` lines per snapshot, strongest first.
 
 Each line gives one contact at its peak bin f* (the bin of the run with the highest R) and
-beam b*, the most powerful of the beams over the threshold at f* (the level, not the ratio,
-points at the source: a broadband source raises its own beams' background, so the ratio
-peaks off it, on a sidelobe):
+beam b*, the beam of the largest excess power over the TPSW background, summed over the
+line's bins and the window's main lobe, among all beams (:func:`line_beam`). Neither the
+ratio nor the level points at the source: a broadband source raises its own beams'
+background, so the ratio of a tonal inside its sector peaks off it on a sidelobe, and the
+level at f* peaks on the broadband source itself; the excess is the tonal's own beam
+pattern. The line is detected on the ratio, so b* may lie where the ratio is under the
+threshold (``snr_db`` is the ratio at b*):
 
-- ``cone_deg``: vertex of the parabola through the beam row's dB levels at f* (b* and its two
-  neighbours); ``bearing_port_deg = heading − cone``, ``bearing_stbd_deg = heading + cone``
+- ``cone_deg``: vertex of the parabola through the dB excess of b* and its two neighbours;
+  ``bearing_port_deg = heading − cone``, ``bearing_stbd_deg = heading + cone``
   (deg true, the left-right pair; heading of the array at the snapshot); ``beam`` = b*;
 - ``freq_hz``: f* + δ·Δf, δ the vertex of the parabola through the dB levels of beam b* at
   f* and its two neighbouring bins, with the frames' taper bias removed
@@ -91,6 +95,33 @@ def line_runs(best_db: np.ndarray, threshold_db: float) -> list[tuple[int, int, 
     return out
 
 
+def line_beam(power: np.ndarray, background: np.ndarray, cone: np.ndarray, floor_db: float
+              ) -> tuple[int, float, float, float]:
+    """The beam of a line: its peak beam, cone angle, vertex gain (dB) and excess power.
+
+    ``power`` and ``background`` (B, n) are each beam's power and TPSW background in the
+    line's bins and the window's main lobe around them. Summed over the bins (Parseval:
+    independent of where the tone falls between bins), the excess ``power − background`` is
+    the tonal's own beam pattern with the broadband of every beam (a tow ship's sector)
+    removed, but its noise grows with the background: in a beam 20 dB louder than the
+    tonal's, its fluctuations exceed the tonal. So the peak beam b* is the beam of the
+    largest excess among the beams whose summed power stands at least ``floor_db`` over
+    their background (the most significant beam when none does), and the cone the vertex of
+    the parabola through the dB excess of b* and its two neighbours (where both are
+    positive), with the vertex's gain over b*.
+    """
+    p, q = power.sum(axis=1), background.sum(axis=1)
+    e = p - q
+    ok = p >= q * 10 ** (floor_db / 10)
+    bi = int(np.argmax(np.where(ok, e, -np.inf))) if ok.any() else int(np.argmax(p / q))
+    c, gain = float(cone[bi]), 0.0
+    if 0 < bi < e.size - 1 and e[bi - 1] > 0 and e[bi + 1] > 0 and e[bi] > 0:
+        row = 10 * np.log10(e[bi - 1:bi + 2])
+        c, top = parabolic_vertex(cone[bi - 1:bi + 2], row)
+        gain = top - row[1]
+    return bi, c, gain, float(e[bi])
+
+
 @register
 class Lines(Stage):
     """Narrowband line contacts (products ``lines``); see module doc."""
@@ -101,6 +132,9 @@ class Lines(Stage):
         "band": Param("band", None, "[lo, hi] Hz searched for lines (default: all input bins)"),
         "threshold_db": Param("float", 12.0, "line threshold over the TPSW background, dB",
                               check=positive),
+        "beam_floor_db": Param("float", 3.0, "a beam may be a line's when its power over the "
+                               "line's bins stands this far over its background, dB",
+                               check=positive),
         "max_lines": Param("int", 16, "lines per snapshot (strongest first)", check=positive),
         "lobe_bins": Param("int", 2, "half-width of the window's main lobe summed for the "
                            "level, bins (2 for Hann)",
@@ -157,18 +191,13 @@ class Lines(Stage):
         runs = sorted(runs, key=lambda r: -r_db[:, r[2]].max())[: self.max_lines]
         n_b, n_f = spec.shape
         for lo, hi, fi in sorted(runs, key=lambda r: r[2]):
-            row = 10 * np.log10(np.maximum(spec[:, fi], 1e-300))
-            bi = int(np.argmax(np.where(r_db[:, fi] >= self.threshold_db, row, -np.inf)))
-            c, gain = float(cone[bi]), 0.0
-            if 0 < bi < n_b - 1:
-                c, top = parabolic_vertex(cone[bi - 1:bi + 2], row[bi - 1:bi + 2])
-                gain = top - row[bi]
+            a, e = max(0, min(lo, fi - self.lobe_bins)), min(n_f, max(hi, fi + self.lobe_bins) + 1)
+            bi, c, gain, excess = line_beam(spec[:, a:e], bg[:, a:e], cone,
+                                            self.beam_floor_db)
             sp = 10 * np.log10(np.maximum(spec[bi], 1e-300))
             f = float(freqs[fi])
             if 0 < fi < n_f - 1:
                 f += tone_offset(sp[fi - 1:fi + 2], *taper) * float(freqs[fi + 1] - freqs[fi])
-            a, e = max(0, min(lo, fi - self.lobe_bins)), min(n_f, max(hi, fi + self.lobe_bins) + 1)
-            excess = float(np.sum(spec[bi, a:e] - bg[bi, a:e]))
             rows["time"].append(t)
             rows["cone_deg"].append(c)
             rows["bearing_port_deg"].append((heading - c) % 360.0)
