@@ -74,8 +74,10 @@ SUB_PARAMS: dict[str, dict[str, Param]] = {
                                  "scans are one source and merge", check=positive,
                                  unit="deg"),
         "reid_s": Param("float", 120.0, "a confirmed track that starts within this of the "
-                        "end of another, with a tonal within reid_hz and a mirror bearing "
-                        "within reid_deg of its last, continues it", check=positive, unit="s"),
+                        "last measurement of a deleted one, with a tonal within reid_hz and a "
+                        "mirror bearing within reid_deg of its there, continues it (the "
+                        "deleted one's later coasted points dropped)", check=positive,
+                        unit="s"),
         "reid_hz": Param("float", 1.0, "see reid_s", check=positive, unit="Hz"),
         "reid_deg": Param("float", 20.0, "see reid_s", check=positive, unit="deg"),
         "same_source_scans": Param("int", 10, "see same_source_deg",

@@ -3,11 +3,16 @@ detection threshold for longer than a track coasts, and its next track starts af
 received frequencies of its tonals identify it (track-to-track association after a gap,
 Blackman & Popoli 1999, sec. 9.4, on the tonal frequencies as the signature).
 
-A confirmed track B that starts within ``reid_s`` of the end of a confirmed track A is A's
-continuation when one of B's first tonals lies within ``reid_hz`` of one of A's last ones and
-one of B's first mirror bearings within ``reid_deg`` of one of A's last; of such tracks the
-one nearest in frequency takes B's history, so that the TMA of the track runs over both
-segments. A's deletion point becomes a confirmed one; B's points keep their statuses.
+A confirmed track B that starts within ``reid_s`` of the last measurement of a confirmed
+track A, which ended (was deleted) with no measurement from B's start on, is A's
+continuation when one of B's first tonals lies within ``reid_hz`` of one of A's tonals at its
+last measurement and one of B's first mirror bearings within ``reid_deg`` of A's there; of
+such tracks the one nearest in frequency takes B's history, so that the TMA of the track runs
+over both segments. A may still be coasting when B starts: a track that loses its source in
+a turn (its predicted bearing rate carries it off the source's lines, and a new track is born
+on them) coasts for ``max_misses`` scans before it is deleted. A's points from B's start on,
+coasted predictions with no measurement, are dropped; its last remaining point becomes a
+confirmed one; B's points keep their statuses.
 Written here: the segments are this package's :class:`~arrayproc.track.manage.tracks.Track`.
 """
 
@@ -21,14 +26,23 @@ from arrayproc.track.multi.tonals import tonal_slots
 __all__ = ["stitch_by_tonals"]
 
 
-def _tonals(tr: Track, n_tonals: int, last: bool) -> np.ndarray:
-    """The tonals (Hz) of the last (first) history point of ``tr`` that holds any."""
-    pts = tr.history[::-1] if last else tr.history
-    for p in pts:
+def _tonals(tr: Track, n_tonals: int, last: bool, upto: int | None = None) -> np.ndarray:
+    """The tonals (Hz) of the last (first) history point of ``tr`` that holds any; with
+    ``upto``, the last such point at or before that index."""
+    pts = tr.history[: (len(tr.history) if upto is None else upto + 1)]
+    for p in (pts[::-1] if last else pts):
         f, _ = tonal_slots(p.x, n_tonals)
         if np.isfinite(f).any():
             return f[np.isfinite(f)]
     return np.zeros(0)
+
+
+def _last_hit(tr: Track) -> int | None:
+    """Index of the last history point of ``tr`` updated by a measurement (None: none)."""
+    for k in range(len(tr.history) - 1, -1, -1):
+        if tr.history[k].meas >= 0:
+            return k
+    return None
 
 
 def _bearing_gap(a: np.ndarray, b: np.ndarray) -> float:
@@ -68,17 +82,20 @@ def stitch_by_tonals(tracks: list[Track], n_tonals: int, reid_s: float, reid_hz:
         for a in conf:
             if a is b or a.id in gone or a.history[-1].status is not Status.DELETED:
                 continue
-            gap = t0 - a.history[-1].time
-            if not 0.0 < gap <= reid_s:
+            k = _last_hit(a)
+            if k is None or not 0.0 < t0 - a.history[k].time <= reid_s:
                 continue
-            fa = _tonals(a, n_tonals, last=True)
+            fa = _tonals(a, n_tonals, last=True, upto=k)
             if fa.size == 0:
                 continue
             df = float(np.abs(fa[:, None] - fb[None, :]).min())
-            if df <= reid_hz and _bearing_gap(a.history[-1].x, b.history[0].x) <= reid_deg \
+            if df <= reid_hz and _bearing_gap(a.history[k].x, b.history[0].x) <= reid_deg \
                     and df < best_df:
                 best, best_df = a, df
         if best is not None:
+            cut = next(i for i, p in enumerate(best.history) if p.time >= t0) \
+                if best.history[-1].time >= t0 else len(best.history)
+            del best.history[cut:], best.hits[cut:]
             best.history[-1].status = Status.CONFIRMED
             best.history.extend(b.history)
             best.hits.extend(b.hits)
