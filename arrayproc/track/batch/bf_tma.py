@@ -28,6 +28,8 @@ profiled cost are a few lines over the bearings-only solver's parts.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.optimize import leastsq
 
@@ -131,6 +133,7 @@ class _Fit:
         self.cr = c if retarded else None
         self.n, self.n_f = tau.size, int(has_f.sum())
         self.w = np.concatenate([np.full(self.n, 1.0 / sig[0]), has_f / sig[1]])
+        self.white: tuple[Callable, Callable] | None = None  # C^{-1/2} of angles, frequencies
 
     def weigh(self, sig: list[float]) -> None:
         """New standard deviations (angle, frequency) of the rows."""
@@ -139,19 +142,37 @@ class _Fit:
     def model(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _model(q, self.tau, self.obs, self.ov, self.hd, self.c, self.cr)
 
-    def res(self, q: np.ndarray) -> np.ndarray:
+    def _raw(self, q: np.ndarray) -> np.ndarray:
+        """Angle residuals (rad) of every row, then frequency residuals (Hz, 0 where none)."""
         a, fm = self.model(q)
         ra = self.ang - a if self.hd is not None else _wrap(self.ang - a)
-        return self.w * np.concatenate([ra, self.f - fm])
+        return np.concatenate([ra, self.has_f * (self.f - fm)])
 
     def unweighted(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Angle residuals (rad) of every row, frequency residuals (Hz) of the rows with one."""
-        r, n = self.res(q), self.n
-        return r[:n] / self.w[:n], r[n:][self.has_f] / self.w[n:][self.has_f]
+        r, n = self._raw(q), self.n
+        return r[:n], r[n:][self.has_f]
+
+    def res(self, q: np.ndarray) -> np.ndarray:
+        """The weighted residuals: divided by σ (eq. (BF1)), or, with ``white`` set,
+        whitened under the correlated errors fitted to each kind (module doc)."""
+        if self.white is None:
+            return self.w * self._raw(q)
+        ra, rf = self.unweighted(q)
+        return np.concatenate([self.white[0](ra), self.white[1](rf)])
+
+    def model_jac(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobian of the angle model (every row) and of the frequency model (rows with a
+        frequency)."""
+        j = _jacobian(q, self.tau, self.obs, self.ov, self.hd, self.c, self.cr)
+        return j[:self.n], j[self.n:][self.has_f]
 
     def jac(self, q: np.ndarray) -> np.ndarray:
-        return -self.w[:, None] * _jacobian(q, self.tau, self.obs, self.ov, self.hd, self.c,
-                                            self.cr)
+        if self.white is None:
+            return -self.w[:, None] * _jacobian(q, self.tau, self.obs, self.ov, self.hd,
+                                                self.c, self.cr)
+        ja, jf = self.model_jac(q)
+        return -np.concatenate([self.white[0](ja), self.white[1](jf)])
 
     def cost(self, q: np.ndarray) -> float:
         return float(np.sum(self.res(q) ** 2))
@@ -174,7 +195,7 @@ class _Fit:
         sol = finish_solution("bearings_frequency", t0, t1, q, self.res(q), wj, wj.T @ wj, o0,
                               np.concatenate(self.model(q)), n_used=n,
                               n_rejected=n_in - n, n_residuals=n + self.n_f)
-        sol.rss = float(np.sum((self.res(q)[:n] / self.w[:n]) ** 2))
+        sol.rss = float(np.sum(self.unweighted(q)[0] ** 2))
         if sides[0]:
             sol.side = sides[0] if sides[0] == sides[1] else f"{sides[0]}>{sides[1]}"
         return sol
@@ -216,6 +237,33 @@ def _searched_state(pop_cost, search: PolarSearch, seed, popsize: int,
     return search.to_state(de.x.reshape(len(search.bounds), 1))[:, 0]
 
 
+def _correlated_refit(fit: _Fit, found: dict, t: np.ndarray) -> tuple[dict, tuple]:
+    """The generalised least-squares polish of every searched solution under errors fitted
+    to the best one's residuals: per kind (angles, frequencies), an exponentially correlated
+    error plus white noise (eq. (C4) of :mod:`.correlation`), its τ, σ and σ_w by the
+    restricted likelihood given the fit's Jacobian (eq. (C5)), τ at most a quarter of the
+    window (:func:`.correlation.window_bounds`); residuals and Jacobian are
+    whitened by :func:`.correlation.correlated_whitener`. A bearing picked from a tonal whose
+    amplitude and phase fluctuate over tens of seconds (a source's coherence time, the
+    ownship's turn moving the beam pattern) has errors correlated over as long, which a
+    white fit counts as independent: its bound is then too small by the square root of the
+    rows per correlation time."""
+    from .correlation import correlated_whitener, estimate_correlation_time, window_bounds
+
+    best = min(found, key=lambda k: fit.cost(found[k]))
+    ra, rf = fit.unweighted(found[best])
+    ja, jf = fit.model_jac(found[best])
+    tf = t[fit.has_f]
+    fit.estimates = (estimate_correlation_time(t, ra, window_bounds(t), white=True,
+                                               design=ja[:, :4]),  # angles do not see f0
+                     estimate_correlation_time(tf, rf, window_bounds(tf), white=True,
+                                               design=jf))
+    fit.white = (correlated_whitener(t, fit.estimates[0]),
+                 correlated_whitener(tf, fit.estimates[1]))
+    found = {k: fit.polish(q) for k, q in found.items()}
+    return found, min(found, key=lambda k: fit.cost(found[k]))
+
+
 def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: np.ndarray,
                              observer_xy: np.ndarray, observer_vel: np.ndarray,
                              sigma_rad: float | None, sigma_hz: float | None, *,
@@ -225,7 +273,8 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
                              max_range_m: float = 20000.0,
                              seed: int | np.random.Generator = 0, popsize: int = 20,
                              maxiter: int = 400, outliers: bool = False, poly_degree: int = 5,
-                             outlier_k: float = 4.0, retarded: bool = False) -> TmaSolution:
+                             outlier_k: float = 4.0, retarded: bool = False,
+                             correlated: bool = False) -> TmaSolution:
     """Maximum-likelihood bearings + frequency TMA (module doc, eqs. (BF1)-(BF3)).
 
     Parameters
@@ -259,6 +308,13 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         what arrives at ``t_b`` left the source ``R_b/c`` earlier), so that the state is the
         source's at ``t0``; the global search uses the reception-time model, the polish and
         the FIM the retarded one.
+    correlated : bool
+        After the white fit, the errors of each kind modelled as exponentially correlated
+        plus white (:func:`.correlation.estimate_correlation_time`, restricted likelihood of
+        its residuals, eq. (C5)) and the fit repeated by generalised least squares
+        (:func:`_correlated_refit`); ``cov`` and ``crlb`` are then those of the correlated
+        errors, and ``tau_s`` (``tau_sigma_s``) the angles' correlation time (its standard
+        error).
 
     Returns
     -------
@@ -319,7 +375,11 @@ def solve_bearings_frequency(times: np.ndarray, angle_rad: np.ndarray, freq_hz: 
         fit.weigh(sig)
         found = {k: fit.polish(q) for k, q in found.items()}
         best = min(found, key=lambda k: fit.cost(found[k]))
+    if correlated:
+        found, best = _correlated_refit(fit, found, t)
     sol = fit.solution(found[best], best, t0, t1, o0, n_in)
+    if correlated:
+        sol.tau_s, sol.tau_sigma_s = fit.estimates[0].tau_s, fit.estimates[0].tau_sigma_s
     if hd is not None:
         flip = {"port": "starboard", "starboard": "port"}
         m = fit.solution(found[(flip[best[0]], flip[best[1]])], (flip[best[0]], flip[best[1]]),

@@ -53,6 +53,7 @@ innovations of every column, P⊥ the projection off the whitened G), maximised 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,7 +64,7 @@ from .fim import compact_jacobian
 from .result import TmaSolution
 
 __all__ = ["CorrelationEstimate", "profile_loglik", "estimate_correlation_time",
-           "solve_compact_estimated"]
+           "correlated_whitener", "window_bounds", "solve_compact_estimated"]
 
 
 @dataclass
@@ -318,6 +319,40 @@ def _white_fit(dt: np.ndarray, r: np.ndarray, lo: float, hi: float, n_grid: int,
     rho = 1.0 / (1.0 + math.exp(-v[1]))
     ll, s2 = _loglik(math.exp(v[0]), rho, dt, r, design)
     return float(v[0]), rho, ll, s2, math.sqrt(var_g) if math.isfinite(var_g) else math.inf
+
+
+def window_bounds(times: np.ndarray, fraction: float = 0.25) -> tuple[float, float]:
+    """Search interval of τ for a fit whose parameters describe the whole window: from a
+    quarter of the shortest step to ``fraction`` of the span. A correlation time comparable
+    with the window is not told apart from the model's own slow terms by one window's
+    residuals (they are confounded with a misfit of the motion model, an offset or a drift of
+    the angles), and a τ̂ there treats the slow curvature that carries a TMA's range as noise."""
+    t = np.sort(np.asarray(times, float).reshape(-1))
+    lo = float(np.diff(t).min()) / 4.0
+    return lo, max(float(fraction * (t[-1] - t[0])), 2.0 * lo)
+
+
+def correlated_whitener(times: np.ndarray, est: CorrelationEstimate
+                        ) -> Callable[[np.ndarray], np.ndarray]:
+    """``C^{-1/2}`` of the fitted error model (eq. C4 with ``est``'s τ̂, σ̂ and σ̂_w; C1 when
+    ``white_sigma`` is 0) at ``times`` (strictly increasing, s), applied to the rows of an
+    (N,) or (N, m) array: the normalised Kalman innovations, the same for every column
+    (residuals and Jacobian alike), so that a least-squares fit of whitened residuals is the
+    generalised least-squares fit, and ``JᵀJ`` of the whitened Jacobian its Fisher
+    information under the correlated errors."""
+    t = np.asarray(times, float).reshape(-1)
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        raise ValueError("the whitener's times must be strictly increasing")
+    s2 = est.sigma ** 2 + est.white_sigma ** 2
+    rho = est.sigma ** 2 / s2 if s2 > 0 else 1.0
+    rho = min(rho, 1.0 - 1e-9)
+    dt, scale = np.diff(t), 1.0 / math.sqrt(s2)
+
+    def apply(cols: np.ndarray) -> np.ndarray:
+        c = np.asarray(cols, float)
+        out, _ = _innovations(est.tau_s, rho, dt, c.reshape(t.size, -1))
+        return (out * scale).reshape(c.shape)
+    return apply
 
 
 def solve_compact_estimated(times: np.ndarray, bearings_rad: np.ndarray,

@@ -37,8 +37,9 @@ Methods: ``bearings`` (thesis eqs. (3.41)-(3.47), :mod:`.bo_tma`), ``delays`` (e
     speed_mps = 7.3            # compact: assumed speed (required)
     sigma_speed_mps = 1.0      # compact: speed prior σ in the bound (default 0: known)
     correlation_s = 0.0        # compact: exponential correlation time of the bearing errors
-    estimate_correlation = false  # compact: τ estimated from a first fit's residuals, refit
-                               # (arrayproc.track.batch.correlation); columns tau_s, tau_sigma_s
+    estimate_correlation = false  # compact, bearings_frequency: τ from a first fit's
+                               # residuals, refit (arrayproc.track.batch.correlation);
+                               # columns tau_s, tau_sigma_s
     n_grid = 200               # compact: grid nodes per axis
     n_headings = 72            # compact: headings over 360°
     array_motion = true        # bearings/delays: correct for the array's motion (below)
@@ -162,8 +163,10 @@ PARAMS = Schema({
     "sigma_speed_mps": Param("float", 0.0, "compact: speed prior σ, m/s", check=_non_negative),
     "correlation_s": Param("float", 0.0, "compact: correlation time, s (with "
                            "estimate_correlation: that of the first fit)", check=_non_negative),
-    "estimate_correlation": Param("bool", False, "compact: estimate the correlation time "
-                                  "from the residuals of a first fit and refit with it"),
+    "estimate_correlation": Param("bool", False, "compact and bearings_frequency: estimate "
+                                  "the errors' correlation time from the residuals of a first "
+                                  "fit and refit with it (bearings_frequency: per kind, "
+                                  "exponential plus white errors, generalised least squares)"),
     "n_grid": Param("int", 200, "compact: grid nodes per axis", check=positive),
     "n_headings": Param("int", 72, "compact: headings", check=positive),
     "pair_cost": Param("float", 3.0, "cross_fix of two tracks files: the largest cost per "
@@ -465,7 +468,7 @@ def _solve_bf(meas: dict, sel: np.ndarray, ts: np.ndarray, poses: list, obs: np.
         t0=w0, t1=w1, min_range_m=cfg["min_range_m"], max_range_m=cfg["max_range_m"],
         seed=cfg["seed"], popsize=cfg["popsize"], maxiter=cfg["maxiter"],
         outliers=cfg["outliers"], poly_degree=cfg["poly_degree"], outlier_k=cfg["outlier_k"],
-        retarded=cfg["retarded_time"])
+        retarded=cfg["retarded_time"], correlated=cfg["estimate_correlation"])
 
 
 def run_tma(products_path: str, config_path: str, output_path: str,
