@@ -75,6 +75,23 @@ def base_source(base_cbf):
     return src
 
 
+def alternate(timers: dict, pairs: int, unit: str, what: str) -> None:
+    """Time ``timers`` (name → callable returning one timing) in alternating order, ``pairs``
+    times each (base first on even pairs, new first on odd ones), and print each one's min and
+    median (``unit``) and the median and quartiles of the paired ratio new/base (``what``
+    says what one pair timed)."""
+    times: dict[str, list[float]] = {k: [] for k in timers}
+    for i in range(pairs):
+        for k in (list(timers) if i % 2 == 0 else list(timers)[::-1]):
+            times[k].append(timers[k]())
+    for k, v in times.items():
+        print(f"{k:5s} {unit}: min {min(v):.3f}, median {np.median(v):.3f}")
+    r = np.array(times["new"]) / np.array(times["base"])
+    q1, q3 = np.percentile(r, [25, 75])
+    print(f"paired ratio new/base: median {np.median(r):.3f}, quartiles {q1:.3f}-{q3:.3f} "
+          f"({pairs} pairs of {what})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", required=True, help="git revision to compare against")
@@ -99,17 +116,8 @@ def main() -> None:
         print(f"max relative difference of the beams, new vs base: {diff:.2e} (the two "
               "stages may pick different FFT back-ends, whose roundings differ)")
         n_snap = int((args.seconds * 5120 - NFFT) // HOP) + 1
-        times: dict[str, list[float]] = {k: [] for k in stages}
-        for i in range(args.pairs):
-            order = list(stages) if i % 2 == 0 else list(stages)[::-1]
-            for k in order:
-                times[k].append(time_stage(stages[k], args.seconds, srcs[k]) / n_snap * 1e3)
-    for k, v in times.items():
-        print(f"{k:5s} ms per snapshot: min {min(v):.3f}, median {np.median(v):.3f}")
-    r = np.array(times["new"]) / np.array(times["base"])
-    q1, q3 = np.percentile(r, [25, 75])
-    print(f"paired ratio new/base: median {np.median(r):.3f}, quartiles {q1:.3f}-{q3:.3f} "
-          f"({args.pairs} pairs of {args.seconds:g} s)")
+        alternate({k: (lambda k=k: time_stage(stages[k], args.seconds, srcs[k]) / n_snap * 1e3)
+                   for k in stages}, args.pairs, "ms per snapshot", f"{args.seconds:g} s")
 
 
 if __name__ == "__main__":

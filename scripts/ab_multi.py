@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from ab_cbf import extract_base
+from ab_cbf import alternate, extract_base
 from bench_multi import run_ours, scenario
 
 
@@ -60,17 +60,8 @@ def main() -> None:
         same = (finals["base"].shape == finals["new"].shape
                 and np.allclose(finals["base"], finals["new"], rtol=0, atol=1e-9))
         print(f"same confirmed tracks at the end: {same} ({len(finals['new'])} tracks)")
-        times: dict[str, list[float]] = {k: [] for k in runs}
-        for i in range(args.pairs):
-            order = list(runs) if i % 2 == 0 else list(runs)[::-1]
-            for k in order:
-                times[k].append(runs[k](t, scans)[0])
-    for k, v in times.items():
-        print(f"{k:5s} s per run: min {min(v):.3f}, median {np.median(v):.3f}")
-    r = np.array(times["new"]) / np.array(times["base"])
-    q1, q3 = np.percentile(r, [25, 75])
-    print(f"paired ratio new/base: median {np.median(r):.3f}, quartiles {q1:.3f}-{q3:.3f} "
-          f"({args.pairs} pairs of {args.scans} scans)")
+        alternate({k: (lambda k=k: runs[k](t, scans)[0]) for k in runs}, args.pairs,
+                  "s per run", f"{args.scans} scans")
 
 
 if __name__ == "__main__":
