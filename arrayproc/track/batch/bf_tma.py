@@ -134,6 +134,7 @@ class _Fit:
         self.n, self.n_f = tau.size, int(has_f.sum())
         self.w = np.concatenate([np.full(self.n, 1.0 / sig[0]), has_f / sig[1]])
         self.white: tuple[Callable, Callable] | None = None  # C^{-1/2} of angles, frequencies
+        self.estimates: tuple = ()  # their CorrelationEstimates (_correlated_refit)
 
     def weigh(self, sig: list[float]) -> None:
         """New standard deviations (angle, frequency) of the rows."""
