@@ -14,7 +14,8 @@ on the best beam per bin, ``R(f) = max_b r(b, f)``:
 
 Each line gives one contact at its peak bin f* (the bin of the run with the highest R) and
 beam b*, the beam of the largest excess power over the TPSW background, summed over the
-line's bins and the window's main lobe, among all beams (:func:`line_beam`). Neither the
+line's bins and the window's main lobe, among the beams whose summed power stands
+``beam_floor_db`` over their background (:func:`line_beam`). Neither the
 ratio nor the level points at the source: a broadband source raises its own beams'
 background, so the ratio of a tonal inside its sector peaks off it on a sidelobe, and the
 level at f* peaks on the broadband source itself; the excess is the tonal's own beam
