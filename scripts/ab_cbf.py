@@ -75,6 +75,15 @@ def base_source(base_cbf):
     return src
 
 
+def ab_parser(doc: str) -> argparse.ArgumentParser:
+    """The options every paired A/B script takes: ``--base`` (the git revision to compare
+    against) and ``--pairs``."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--base", required=True, help="git revision to compare against")
+    ap.add_argument("--pairs", type=int, default=12)
+    return ap
+
+
 def alternate(timers: dict, pairs: int, unit: str, what: str) -> None:
     """Time ``timers`` (name → callable returning one timing) in alternating order, ``pairs``
     times each (base first on even pairs, new first on odd ones), and print each one's min and
@@ -93,9 +102,7 @@ def alternate(timers: dict, pairs: int, unit: str, what: str) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--base", required=True, help="git revision to compare against")
-    ap.add_argument("--pairs", type=int, default=12)
+    ap = ab_parser(__doc__)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--batch", type=int, default=32)
     ap.add_argument("--threads", type=int, default=0)

@@ -14,13 +14,12 @@ Printed: min and median seconds of each, and the median and quartiles of the pai
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import tempfile
 from pathlib import Path
 
 import numpy as np
-from ab_cbf import alternate, extract_base
+from ab_cbf import ab_parser, alternate, extract_base
 from bench_multi import run_ours, scenario
 
 
@@ -44,9 +43,7 @@ def runner(pkg: str, t, scans):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--base", required=True, help="git revision to compare against")
-    ap.add_argument("--pairs", type=int, default=12)
+    ap = ab_parser(__doc__)
     ap.add_argument("--scans", type=int, default=300)
     ap.add_argument("--clutter", type=float, default=5.0)
     ap.add_argument("--seed", type=int, default=1)
